@@ -1,0 +1,64 @@
+//! The device and shader compiler every pass is built from, and the compute-kernel helper the
+//! table builders share.
+
+use std::sync::Arc;
+
+use crate::error::Result;
+use crate::shader::ShaderCompiler;
+use crate::vk::{
+    BindingKind, DescriptorSetLayout, Device, DeviceSelector, InstanceDesc, Pipeline,
+    PipelineLayout, SpecConstants, Stages,
+};
+
+pub struct Gpu {
+    pub device: Arc<Device>,
+    pub shaders: ShaderCompiler,
+}
+
+impl Gpu {
+    pub fn new(instance: InstanceDesc, selector: &DeviceSelector) -> Result<Self> {
+        Ok(Self {
+            device: Device::create(instance, selector)?,
+            shaders: ShaderCompiler::new()?,
+        })
+    }
+
+    /// With the validation layer on: what the tests use.
+    pub fn validated() -> Result<Self> {
+        Self::new(InstanceDesc::validated(), &DeviceSelector::Best)
+    }
+}
+
+/// A compute entry point with its single descriptor set layout and push-constant block.
+pub struct ComputeKernel {
+    pub set_layout: DescriptorSetLayout,
+    pub layout: PipelineLayout,
+    pub pipeline: Pipeline,
+}
+
+impl ComputeKernel {
+    pub fn new<S: SpecConstants>(
+        gpu: &Gpu,
+        entry: &str,
+        bindings: &[BindingKind],
+        push_constant_bytes: u32,
+        spec: &S,
+    ) -> Result<Self> {
+        let spirv = gpu.shaders.compile(entry, &[])?;
+        let device = &gpu.device;
+        let set_layout = DescriptorSetLayout::new(device, bindings, Stages::Compute, entry)?;
+        let layout = PipelineLayout::new(
+            device,
+            &[&set_layout],
+            push_constant_bytes,
+            Stages::Compute,
+            entry,
+        )?;
+        let pipeline = Pipeline::compute(device, &layout, &spirv, spec, entry)?;
+        Ok(Self {
+            set_layout,
+            layout,
+            pipeline,
+        })
+    }
+}

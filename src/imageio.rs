@@ -1,0 +1,244 @@
+//! Reading and writing images: OpenEXR in, OpenEXR (RGBA half) and tone-mapped PNG out.
+//!
+//! Every output is written to a temporary file beside the target and renamed into place, so a
+//! failed or interrupted run never leaves a partial file under the requested name.
+
+use std::path::{Path, PathBuf};
+
+use half::f16;
+
+use crate::error::{Error, Result};
+
+/// A linear RGBA image in f32, rows top to bottom.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HdrImage {
+    pub width: usize,
+    pub height: usize,
+    pub pixels: Vec<[f32; 4]>,
+}
+
+impl HdrImage {
+    pub fn pixel(&self, x: usize, y: usize) -> [f32; 4] {
+        self.pixels[y * self.width + x]
+    }
+}
+
+fn input_error(path: &Path, message: impl Into<String>) -> Error {
+    Error::Input {
+        path: path.to_owned(),
+        message: message.into(),
+    }
+}
+
+/// Reads the first RGBA layer of an OpenEXR file (any compression the `exr` crate reads, DWAB
+/// included). Missing alpha reads as 1. Rejects non-finite radiance, which would otherwise turn
+/// into NaN pixels downstream; slightly negative values, which lossy EXR compression (DWAB)
+/// leaves around dark texels, are clamped to 0.
+pub fn read_exr(path: &Path) -> Result<HdrImage> {
+    if !path.is_file() {
+        return Err(input_error(path, "no such file"));
+    }
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |resolution, _| HdrImage {
+            width: resolution.width(),
+            height: resolution.height(),
+            pixels: vec![[0.0; 4]; resolution.width() * resolution.height()],
+        },
+        |image: &mut HdrImage, position, (r, g, b, a): (f32, f32, f32, f32)| {
+            let index = position.y() * image.width + position.x();
+            image.pixels[index] = [r, g, b, a];
+        },
+    )
+    .map_err(|e| input_error(path, format!("not a readable OpenEXR image ({e})")))?;
+    let mut image = image.layer_data.channel_data.pixels;
+    if image.width == 0 || image.height == 0 {
+        return Err(input_error(path, "image has no pixels"));
+    }
+    if let Some(i) = image
+        .pixels
+        .iter()
+        .position(|p| p[..3].iter().any(|c| !c.is_finite()))
+    {
+        return Err(input_error(
+            path,
+            format!(
+                "pixel ({}, {}) has radiance {:?}; expected finite values",
+                i % image.width,
+                i / image.width,
+                &image.pixels[i][..3]
+            ),
+        ));
+    }
+    for p in &mut image.pixels {
+        for c in &mut p[..3] {
+            *c = c.max(0.0);
+        }
+    }
+    Ok(image)
+}
+
+/// Writes through a temporary file in the same directory, then renames it over `path`.
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
+) -> Result<()> {
+    let output_error = |message: String| Error::Output {
+        path: path.to_owned(),
+        message,
+    };
+    let parent = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(parent).map_err(|e| output_error(e.to_string()))?;
+    let name = path
+        .file_name()
+        .ok_or_else(|| output_error("not a file name".into()))?
+        .to_string_lossy();
+    let temp: PathBuf = parent.join(format!(".{name}.{}.tmp", std::process::id()));
+    let result = write(&temp).and_then(|()| {
+        std::fs::rename(&temp, path).map_err(|e| format!("renaming the temporary file: {e}"))
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&temp);
+    }
+    result.map_err(output_error)
+}
+
+/// Writes RGBA half-float pixels (rows top to bottom) as an OpenEXR file.
+pub fn write_exr_rgba16f(path: &Path, width: usize, height: usize, pixels: &[[f16; 4]]) -> Result<()> {
+    assert_eq!(pixels.len(), width * height, "pixel count must match the size");
+    write_atomically(path, |temp| {
+        exr::prelude::write_rgba_file(temp, width, height, |x, y| {
+            let p = pixels[y * width + x];
+            (p[0], p[1], p[2], p[3])
+        })
+        .map_err(|e| e.to_string())
+    })
+}
+
+/// Narkowicz 2015's fit of the ACES filmic curve.
+fn aces(x: f32) -> f32 {
+    ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
+}
+
+fn srgb_encode(x: f32) -> f32 {
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Tone-maps linear radiance to 8-bit sRGB: exposure (in stops), ACES fit, sRGB encoding.
+pub fn tonemap(pixels: &[[f16; 4]], exposure_ev: f32) -> Vec<u8> {
+    let scale = exposure_ev.exp2();
+    pixels
+        .iter()
+        .flat_map(|p| {
+            let c = |v: f16| (srgb_encode(aces(v.to_f32() * scale)) * 255.0 + 0.5) as u8;
+            [c(p[0]), c(p[1]), c(p[2]), 255]
+        })
+        .collect()
+}
+
+/// Writes a tone-mapped PNG of RGBA half-float pixels.
+pub fn write_png_tonemapped(
+    path: &Path,
+    width: usize,
+    height: usize,
+    pixels: &[[f16; 4]],
+    exposure_ev: f32,
+) -> Result<()> {
+    let rgba = tonemap(pixels, exposure_ev);
+    write_png(path, width, height, &rgba)
+}
+
+/// Writes 8-bit RGBA pixels as a PNG.
+pub fn write_png(path: &Path, width: usize, height: usize, rgba: &[u8]) -> Result<()> {
+    write_atomically(path, |temp| {
+        let file = std::fs::File::create(temp).map_err(|e| e.to_string())?;
+        let mut encoder =
+            png::Encoder::new(std::io::BufWriter::new(file), width as u32, height as u32);
+        encoder.set_color(png::ColorType::Rgba);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+        writer.write_image_data(rgba).map_err(|e| e.to_string())?;
+        writer.finish().map_err(|e| e.to_string())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp_dir(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("lamina-imageio-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn exr_round_trip_is_exact_for_half_floats() {
+        let (w, h) = (37, 23);
+        // Every pixel a distinct half value, including subnormals, large values and zero.
+        let pixels: Vec<[f16; 4]> = (0..w * h)
+            .map(|i| {
+                let bits = (i as u16).wrapping_mul(97) & 0x7bff;
+                [
+                    f16::from_bits(bits),
+                    f16::from_bits(bits ^ 0x0155),
+                    f16::from_f32(i as f32 * 0.37),
+                    f16::from_f32(1.0),
+                ]
+            })
+            .collect();
+        let path = temp_dir("roundtrip").join("image.exr");
+        write_exr_rgba16f(&path, w, h, &pixels).unwrap();
+        let back = read_exr(&path).unwrap();
+        assert_eq!((back.width, back.height), (w, h));
+        for (a, b) in pixels.iter().zip(&back.pixels) {
+            for c in 0..4 {
+                // f16 → f32 is exact, so equal f32s mean equal half bits.
+                assert_eq!(a[c].to_f32().to_bits(), b[c].to_bits(), "{a:?} vs {b:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn corrupt_and_missing_files_are_named() {
+        let dir = temp_dir("corrupt");
+        let bad = dir.join("bad.exr");
+        std::fs::write(&bad, b"this is not an EXR file").unwrap();
+        let e = read_exr(&bad).unwrap_err().to_string();
+        assert!(e.contains("bad.exr") && e.contains("OpenEXR"), "{e}");
+        let e = read_exr(&dir.join("missing.exr")).unwrap_err().to_string();
+        assert!(e.contains("missing.exr") && e.contains("no such file"), "{e}");
+    }
+
+    #[test]
+    fn failed_writes_leave_nothing_behind() {
+        let dir = temp_dir("atomic");
+        let path = dir.join("out.png");
+        let r = write_atomically(&path, |temp| {
+            std::fs::write(temp, b"partial").unwrap();
+            Err("simulated failure".into())
+        });
+        assert!(r.is_err());
+        assert!(!path.exists());
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn tonemap_is_monotonic_and_bounded() {
+        let ramp: Vec<[f16; 4]> = (0..64)
+            .map(|i| [f16::from_f32(i as f32 * 0.25); 4])
+            .collect();
+        let out = tonemap(&ramp, 0.0);
+        let reds: Vec<u8> = out.chunks(4).map(|p| p[0]).collect();
+        assert_eq!(reds[0], 0);
+        assert!(reds.windows(2).all(|w| w[0] <= w[1]));
+        assert!(*reds.last().unwrap() >= 250);
+    }
+}

@@ -1,0 +1,9 @@
+//! Passes and the frame that runs them: the sky, the shaded sphere, readback.
+
+pub mod forward;
+pub mod frame;
+pub mod renderer;
+pub mod scene;
+pub mod sky;
+
+pub use renderer::{RenderedFrame, Renderer, COLOR_FORMAT};

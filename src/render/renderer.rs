@@ -1,0 +1,205 @@
+//! The frame: sky, then the shaded sphere, into an RGBA16F target that is read back.
+//!
+//! Both draws sit in their own profiler scope; the shaded scope is the number lamina reports
+//! (GPU time of the shaded draw and its fragment-shader invocations).
+
+use std::collections::HashMap;
+
+use half::f16;
+
+use crate::error::Result;
+use crate::gpu::Gpu;
+use crate::imageio::HdrImage;
+use crate::material::Layer;
+use crate::shader::{VariantKey, G2};
+use crate::tables::environment::{EnvDesc, Environment};
+use crate::tables::split_sum::{self, SplitSumTable};
+use crate::vk::{
+    submit_and_wait, Access, BindingKind, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
+    DescriptorSetLayout, Format, GpuProfiler, Image, ImageDesc, ImageState, PipelineLayout,
+    Resource, Sampler, SamplerDesc, ScopeTiming, Stages,
+};
+
+use super::forward::ForwardPass;
+use super::frame::FrameConstants;
+use super::scene::{uv_sphere, Camera};
+use super::sky::SkyPass;
+
+/// The render target's format: linear HDR, written to EXR as is.
+pub const COLOR_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+
+/// One rendered image and what the GPU measured while drawing it.
+pub struct RenderedFrame {
+    pub width: u32,
+    pub height: u32,
+    /// Linear radiance, rows top to bottom.
+    pub pixels: Vec<[f16; 4]>,
+    pub sky: ScopeTiming,
+    pub shaded: ScopeTiming,
+}
+
+pub struct Renderer<'g> {
+    gpu: &'g Gpu,
+    pub environment: Environment,
+    split_sums: HashMap<G2, SplitSumTable>,
+    set_layout: DescriptorSetLayout,
+    layout: PipelineLayout,
+    sampler: Sampler,
+    sky: SkyPass,
+    vertices: Buffer,
+    indices: Buffer,
+    index_count: u32,
+    pub camera: Camera,
+}
+
+impl<'g> Renderer<'g> {
+    pub fn new(gpu: &'g Gpu, equirect: &HdrImage, env: EnvDesc) -> Result<Self> {
+        let device = &gpu.device;
+        let environment = Environment::build(gpu, equirect, env)?;
+        let set_layout = DescriptorSetLayout::new(
+            device,
+            &[
+                BindingKind::UniformBuffer,
+                BindingKind::SampledImage,
+                BindingKind::SampledImage,
+            ],
+            Stages::Graphics,
+            "scene",
+        )?;
+        let layout = PipelineLayout::new(device, &[&set_layout], 0, Stages::Graphics, "scene")?;
+        let sampler = Sampler::new(device, SamplerDesc::linear_clamp(), "scene")?;
+        let sky = SkyPass::new(gpu, &layout, COLOR_FORMAT)?;
+        let mesh = uv_sphere(64, 128);
+        let vertices = Buffer::with_data(
+            device,
+            BufferUsageFlags::VERTEX_BUFFER,
+            &mesh.vertices,
+            "sphere vertices",
+        )?;
+        let indices = Buffer::with_data(
+            device,
+            BufferUsageFlags::INDEX_BUFFER,
+            &mesh.indices,
+            "sphere indices",
+        )?;
+        Ok(Self {
+            gpu,
+            environment,
+            split_sums: HashMap::new(),
+            set_layout,
+            layout,
+            sampler,
+            sky,
+            vertices,
+            indices,
+            index_count: mesh.indices.len() as u32,
+            camera: Camera::default(),
+        })
+    }
+
+    /// Compiles and builds the pipeline of `variant` (and the split-sum table its G2 needs).
+    pub fn prepare(&mut self, variant: VariantKey) -> Result<ForwardPass> {
+        if !self.split_sums.contains_key(&variant.g2) {
+            let table = SplitSumTable::build(
+                self.gpu,
+                variant.g2,
+                split_sum::DEFAULT_SIZE,
+                split_sum::DEFAULT_SAMPLES,
+            )?;
+            self.split_sums.insert(variant.g2, table);
+        }
+        ForwardPass::new(self.gpu, &self.layout, COLOR_FORMAT, variant)
+    }
+
+    /// Renders one frame of `layer` with a prepared pass.
+    pub fn render(
+        &self,
+        pass: &ForwardPass,
+        layer: &Layer,
+        width: u32,
+        height: u32,
+    ) -> Result<RenderedFrame> {
+        let device = &self.gpu.device;
+        let table = &self.split_sums[&pass.variant.g2];
+        let view_proj = self.camera.view_proj(width as f32 / height as f32);
+        let pad = |v: [f32; 3]| [v[0], v[1], v[2], 0.0];
+        let constants = FrameConstants {
+            view_proj: view_proj.to_cols_array_2d(),
+            inv_view_proj: view_proj.inverse().to_cols_array_2d(),
+            camera_pos: self.camera.eye.extend(1.0).to_array(),
+            base_ior: pad(layer.ior),
+            base_kappa: pad(layer.kappa),
+            params: [
+                layer.roughness,
+                self.environment.desc.mip_count as f32,
+                0.0,
+                0.0,
+            ],
+        };
+        let uniforms = Buffer::with_data(
+            device,
+            BufferUsageFlags::UNIFORM_BUFFER,
+            &[constants],
+            "frame constants",
+        )?;
+        let mut set = DescriptorSet::new(device, &self.set_layout, "scene")?;
+        set.write(0, Resource::Buffer(&uniforms))
+            .write(1, Resource::Sampled(&self.environment.view, &self.sampler))
+            .write(2, Resource::Sampled(&table.view, &self.sampler));
+
+        let target = Image::new(
+            device,
+            ImageDesc::render_target(COLOR_FORMAT, width, height),
+            "render target",
+        )?;
+        let target_view = target.view("render target")?;
+        let readback = Buffer::new(
+            device,
+            BufferDesc::readback(u64::from(width) * u64::from(height) * 8),
+            "render readback",
+        )?;
+        let mut profiler = GpuProfiler::new(device, 2, "frame")?;
+
+        submit_and_wait(device, "frame", |rec| {
+            rec.transition(&target, 0..1, ImageState::Undefined, ImageState::ColorAttachment);
+            rec.bind_pipeline(&self.sky.pipeline);
+            rec.bind_set(&self.sky.pipeline, &self.layout, 0, &set);
+            let scope = profiler
+                .begin(rec, "sky")
+                .expect("first scope of a fresh profiler");
+            rec.begin_rendering(&target_view, width, height, [0.0, 0.0, 0.0, 1.0]);
+            rec.draw(3);
+            rec.end_rendering();
+            profiler.end(rec, scope);
+
+            rec.bind_pipeline(&pass.pipeline);
+            let scope = profiler
+                .begin(rec, "shaded")
+                .expect("the sky scope is closed");
+            rec.begin_rendering_load(&target_view, width, height);
+            rec.bind_vertex_buffer(&self.vertices);
+            rec.bind_index_buffer_u32(&self.indices);
+            rec.draw_indexed(self.index_count);
+            rec.end_rendering();
+            profiler.end(rec, scope);
+
+            rec.transition(&target, 0..1, ImageState::ColorAttachment, ImageState::TransferSrc);
+            rec.copy_image_to_buffer(&target, 0, &readback);
+            rec.barrier(Access::TransferWrite, Access::HostRead);
+            Ok(())
+        })?;
+
+        let mut scopes = profiler.results()?.into_iter();
+        let (sky, shaded) = (
+            scopes.next().expect("sky scope"),
+            scopes.next().expect("shaded scope"),
+        );
+        Ok(RenderedFrame {
+            width,
+            height,
+            pixels: readback.read::<[f16; 4]>(),
+            sky,
+            shaded,
+        })
+    }
+}

@@ -1,0 +1,27 @@
+//! The background: a full-screen triangle showing the environment's mip 0 along each view ray.
+
+use crate::error::Result;
+use crate::gpu::Gpu;
+use crate::vk::{Format, GraphicsDesc, Pipeline, PipelineLayout};
+
+pub struct SkyPass {
+    /// Draws 3 vertices, no vertex buffer, with the scene set bound.
+    pub pipeline: Pipeline,
+}
+
+impl SkyPass {
+    pub fn new(gpu: &Gpu, layout: &PipelineLayout, color_format: Format) -> Result<Self> {
+        let vertex = gpu.shaders.compile("sky.vert.glsl", &[])?;
+        let fragment = gpu.shaders.compile("sky.frag.glsl", &[])?;
+        let desc = GraphicsDesc {
+            vertex: &vertex,
+            fragment: &fragment,
+            vertex_stride: 0,
+            attributes: &[],
+            color_format,
+            cull_back: false,
+        };
+        let pipeline = Pipeline::graphics(&gpu.device, layout, &desc, &(), "sky")?;
+        Ok(Self { pipeline })
+    }
+}

@@ -1,0 +1,175 @@
+//! GLSL → SPIR-V with shaderc, from the sources embedded at build time.
+//!
+//! Entry points are `glsl/<pass>.<stage>.glsl` with stage ∈ {vert, frag, comp}; includes live
+//! under `glsl/include/` and are resolved relative to the including file first, then to
+//! `glsl/include/`. Host constants reach GLSL as macro definitions ([`HOST_DEFINES`]) so shaders
+//! never hard-code them.
+
+mod embedded {
+    include!(concat!(env!("OUT_DIR"), "/glsl_files.rs"));
+}
+
+use std::path::{Component, Path, PathBuf};
+
+/// Constants shared with GLSL; the shaders read them as macros.
+pub const HOST_DEFINES: &[(&str, u32)] = &[
+    ("LAMINA_MAX_LAYERS_LIMIT", super::variant::MAX_LAYERS_LIMIT),
+    ("LAMINA_LOCAL_SIZE_2D", crate::tables::LOCAL_SIZE_2D),
+];
+
+#[derive(Debug, thiserror::Error)]
+pub enum ShaderError {
+    #[error("no GLSL entry point `{0}` under glsl/ (entry points: {1})")]
+    UnknownEntry(String, String),
+    #[error("`{0}` is not named <pass>.<vert|frag|comp>.glsl")]
+    UnknownStage(String),
+    #[error("compiling glsl/{path}:\n{log}")]
+    Compile { path: String, log: String },
+    #[error("shaderc could not start: {0}")]
+    Init(String),
+}
+
+/// The text of an embedded GLSL file, by its path under `glsl/`.
+pub fn source(path: &str) -> Option<&'static str> {
+    embedded::GLSL_FILES
+        .iter()
+        .find(|(p, _)| *p == path)
+        .map(|(_, s)| *s)
+}
+
+/// Every entry point (file at the top of `glsl/`), sorted.
+pub fn entry_points() -> Vec<&'static str> {
+    embedded::GLSL_FILES
+        .iter()
+        .map(|(p, _)| *p)
+        .filter(|p| !p.contains('/'))
+        .collect()
+}
+
+fn stage_of(entry: &str) -> Result<shaderc::ShaderKind, ShaderError> {
+    let stem = entry
+        .strip_suffix(".glsl")
+        .ok_or_else(|| ShaderError::UnknownStage(entry.into()))?;
+    match stem.rsplit('.').next() {
+        Some("vert") => Ok(shaderc::ShaderKind::Vertex),
+        Some("frag") => Ok(shaderc::ShaderKind::Fragment),
+        Some("comp") => Ok(shaderc::ShaderKind::Compute),
+        _ => Err(ShaderError::UnknownStage(entry.into())),
+    }
+}
+
+/// Lexically normalises `a/b/../c` to `a/c` (embedded paths have no symlinks).
+fn normalise(path: &Path) -> Option<String> {
+    let mut out = PathBuf::new();
+    for c in path.components() {
+        match c {
+            Component::Normal(p) => out.push(p),
+            Component::ParentDir => {
+                if !out.pop() {
+                    return None;
+                }
+            }
+            Component::CurDir => {}
+            _ => return None,
+        }
+    }
+    Some(out.to_string_lossy().replace('\\', "/"))
+}
+
+fn resolve_include(requested: &str, requester: &str) -> Result<shaderc::ResolvedInclude, String> {
+    let requester_dir = Path::new(requester).parent().unwrap_or(Path::new(""));
+    let candidates = [
+        normalise(&requester_dir.join(requested)),
+        normalise(&Path::new("include").join(requested)),
+    ];
+    for name in candidates.into_iter().flatten() {
+        if let Some(content) = source(&name) {
+            return Ok(shaderc::ResolvedInclude {
+                resolved_name: name,
+                content: content.to_owned(),
+            });
+        }
+    }
+    Err(format!(
+        "cannot find include `{requested}` (from {requester}) under glsl/ or glsl/include/"
+    ))
+}
+
+/// Compiles entry points; one shaderc compiler per instance.
+pub struct ShaderCompiler {
+    compiler: shaderc::Compiler,
+}
+
+impl ShaderCompiler {
+    pub fn new() -> Result<Self, ShaderError> {
+        let compiler = shaderc::Compiler::new().map_err(|e| ShaderError::Init(e.to_string()))?;
+        Ok(Self { compiler })
+    }
+
+    /// Compiles `entry` (a path under `glsl/`) with extra `defines` (name, value).
+    pub fn compile(&self, entry: &str, defines: &[(&str, &str)]) -> Result<Vec<u32>, ShaderError> {
+        let text = source(entry).ok_or_else(|| {
+            ShaderError::UnknownEntry(entry.into(), entry_points().join(", "))
+        })?;
+        self.compile_source(entry, text, defines)
+    }
+
+    /// Compiles `text` as if it were the entry point `name` (which gives the stage).
+    pub fn compile_source(
+        &self,
+        name: &str,
+        text: &str,
+        defines: &[(&str, &str)],
+    ) -> Result<Vec<u32>, ShaderError> {
+        let entry = name;
+        let kind = stage_of(entry)?;
+        let mut options =
+            shaderc::CompileOptions::new().map_err(|e| ShaderError::Init(e.to_string()))?;
+        options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_3 as u32);
+        options.set_optimization_level(shaderc::OptimizationLevel::Performance);
+        options.set_include_callback(|requested, _kind, requester, _depth| {
+            resolve_include(requested, requester)
+        });
+        for (name, value) in HOST_DEFINES {
+            options.add_macro_definition(name, Some(&value.to_string()));
+        }
+        for (name, value) in defines {
+            options.add_macro_definition(name, Some(value));
+        }
+        let artifact = self
+            .compiler
+            .compile_into_spirv(text, kind, entry, "main", Some(&options))
+            .map_err(|e| ShaderError::Compile {
+                path: entry.into(),
+                log: e.to_string(),
+            })?;
+        Ok(artifact.as_binary().to_vec())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn includes_resolve_relative_then_rooted() {
+        let r = resolve_include("lib/math.glsl", "tonemap.comp.glsl").unwrap();
+        assert_eq!(r.resolved_name, "include/lib/math.glsl");
+        let r = resolve_include("../shared/frame.glsl", "include/lib/ibl.glsl").unwrap();
+        assert_eq!(r.resolved_name, "include/shared/frame.glsl");
+        let e = resolve_include("lib/nope.glsl", "x.comp.glsl").unwrap_err();
+        assert!(e.contains("lib/nope.glsl"), "{e}");
+    }
+
+    #[test]
+    fn compile_errors_name_file_and_line() {
+        let c = ShaderCompiler::new().unwrap();
+        let err = c.compile("does-not-exist.comp.glsl", &[]).unwrap_err();
+        assert!(matches!(err, ShaderError::UnknownEntry(..)));
+        let broken = "#version 460\n#include \"lib/math.glsl\"\nvoid main() { undefined_thing(); }\n";
+        let err = c.compile_source("broken.comp.glsl", broken, &[]).unwrap_err();
+        let text = err.to_string();
+        assert!(text.contains("broken.comp.glsl:3:"), "{text}");
+        assert!(text.contains("undefined_thing"), "{text}");
+    }
+}

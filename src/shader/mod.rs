@@ -1,0 +1,7 @@
+//! Shader compilation and the variant key.
+
+mod compiler;
+pub mod variant;
+
+pub use compiler::{entry_points, source, ShaderCompiler, ShaderError, HOST_DEFINES};
+pub use variant::{Axis, Fgd, Model, Ndf, ShadeSpec, Tir, VariantError, VariantKey, G2};

@@ -1,0 +1,307 @@
+//! Environment lighting: equirectangular EXR → cube map → GGX-prefiltered mips.
+//!
+//! 1. The equirect map is uploaded as RGBA16F and resampled into mip 0 of a source cube by
+//!    `equirect_to_cube.comp.glsl`; the source cube's other mips are box-filtered blits.
+//! 2. The prefiltered cube copies the source's mip 0 (α = 0 is a mirror) and fills mip m ≥ 1
+//!    with `prefilter.comp.glsl` at α = (m / (M − 1))², the mapping `lib/ibl.glsl` reads back.
+//!    The filter importance-samples D and reads the source mip matching each sample's solid
+//!    angle, so a few dozen samples give a smooth lobe.
+
+use std::f64::consts::PI;
+
+use glam::DVec3;
+use half::f16;
+
+use crate::error::{Error, Result};
+use crate::gpu::{ComputeKernel, Gpu};
+use crate::imageio::HdrImage;
+use crate::vk::{
+    submit_and_wait, upload_image, BindingKind, DescriptorSet, Format, Image, ImageDesc,
+    ImageState, ImageUsageFlags, ImageView, Resource, Sampler, SamplerDesc,
+};
+
+/// Size and quality of the prefiltered cube.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EnvDesc {
+    pub face_size: u32,
+    /// Mips of the prefiltered cube: roughness r = mip / (mip_count − 1).
+    pub mip_count: u32,
+    /// GGX samples per prefiltered texel.
+    pub samples: u32,
+}
+
+impl Default for EnvDesc {
+    /// 512² faces match the 1024×512 equirect maps' texel density at the equator.
+    fn default() -> Self {
+        Self {
+            face_size: 512,
+            mip_count: 8,
+            samples: 64,
+        }
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ConvertPush {
+    face_size: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct PrefilterPush {
+    alpha: f32,
+    source_size: u32,
+    destination_size: u32,
+    sample_count: u32,
+}
+
+/// Largest finite half float: brighter texels (a bare sun) are clamped to it on upload.
+const HALF_MAX: f32 = 65504.0;
+
+pub struct Environment {
+    /// RGBA16F cube, `desc.mip_count` mips, in `FragmentRead` state.
+    pub cube: Image,
+    pub view: ImageView,
+    pub desc: EnvDesc,
+}
+
+impl Environment {
+    pub fn build(gpu: &Gpu, equirect: &HdrImage, desc: EnvDesc) -> Result<Self> {
+        let max_mips = 32 - desc.face_size.max(1).leading_zeros();
+        if desc.face_size < 4 || desc.mip_count < 2 || desc.mip_count > max_mips {
+            return Err(Error::Unsupported(format!(
+                "environment cube of {} texels needs 2..={max_mips} mips (got {})",
+                desc.face_size, desc.mip_count
+            )));
+        }
+        let device = &gpu.device;
+        let size = desc.face_size;
+
+        let halves: Vec<f16> = equirect
+            .pixels
+            .iter()
+            .flat_map(|p| [p[0], p[1], p[2], 1.0])
+            .map(|c| f16::from_f32(c.min(HALF_MAX)))
+            .collect();
+        let source_2d = Image::new(
+            device,
+            ImageDesc::new_2d(
+                Format::R16G16B16A16_SFLOAT,
+                equirect.width as u32,
+                equirect.height as u32,
+            ),
+            "equirect",
+        )?;
+        upload_image(
+            device,
+            &source_2d,
+            bytemuck::cast_slice(&halves),
+            ImageState::ComputeRead,
+        )?;
+        let source_2d_view = source_2d.view("equirect")?;
+        let equirect_sampler = Sampler::new(device, SamplerDesc::equirect(), "equirect")?;
+        let cube_sampler = Sampler::new(device, SamplerDesc::linear_clamp(), "cube source")?;
+
+        let storage_usage = ImageUsageFlags::STORAGE
+            | ImageUsageFlags::SAMPLED
+            | ImageUsageFlags::TRANSFER_SRC
+            | ImageUsageFlags::TRANSFER_DST;
+        let source = Image::new(
+            device,
+            ImageDesc::new_cube(Format::R16G16B16A16_SFLOAT, size)
+                .all_mips()
+                .usage(storage_usage),
+            "environment source cube",
+        )?;
+        let source_levels = source.desc.mip_levels;
+        let source_view = source.view("environment source cube")?;
+        let source_mip0 = source.mip_view(0, "environment source mip 0")?;
+        let cube = Image::new(
+            device,
+            ImageDesc::new_cube(Format::R16G16B16A16_SFLOAT, size)
+                .mips(desc.mip_count)
+                .usage(storage_usage),
+            "environment prefiltered cube",
+        )?;
+
+        let convert = ComputeKernel::new(
+            gpu,
+            "equirect_to_cube.comp.glsl",
+            &[BindingKind::SampledImage, BindingKind::StorageImage],
+            std::mem::size_of::<ConvertPush>() as u32,
+            &(),
+        )?;
+        let mut convert_set = DescriptorSet::new(device, &convert.set_layout, "equirect to cube")?;
+        convert_set
+            .write(0, Resource::Sampled(&source_2d_view, &equirect_sampler))
+            .write(1, Resource::Storage(&source_mip0));
+
+        let prefilter = ComputeKernel::new(
+            gpu,
+            "prefilter.comp.glsl",
+            &[BindingKind::SampledImage, BindingKind::StorageImage],
+            std::mem::size_of::<PrefilterPush>() as u32,
+            &crate::shader::VariantKey::default().spec(),
+        )?;
+        let mut targets = Vec::new();
+        for mip in 1..desc.mip_count {
+            let view = cube.mip_view(mip, &format!("prefiltered mip {mip}"))?;
+            let mut set = DescriptorSet::new(device, &prefilter.set_layout, "prefilter")?;
+            set.write(0, Resource::Sampled(&source_view, &cube_sampler))
+                .write(1, Resource::Storage(&view));
+            targets.push((mip, view, set));
+        }
+
+        submit_and_wait(device, "environment", |rec| {
+            rec.begin_label("equirect to cube");
+            rec.transition(&source, 0..1, ImageState::Undefined, ImageState::ComputeWrite);
+            rec.bind_pipeline(&convert.pipeline);
+            rec.bind_set(&convert.pipeline, &convert.layout, 0, &convert_set);
+            rec.push_constants(&convert.layout, &ConvertPush { face_size: size });
+            rec.dispatch(super::groups(size), super::groups(size), 6);
+            rec.transition(&source, 0..1, ImageState::ComputeWrite, ImageState::TransferSrc);
+            for mip in 1..source_levels {
+                rec.transition(&source, mip..mip + 1, ImageState::Undefined, ImageState::TransferDst);
+                rec.blit_mip_down(&source, mip);
+                rec.transition(&source, mip..mip + 1, ImageState::TransferDst, ImageState::TransferSrc);
+            }
+            rec.transition(&cube, 0..1, ImageState::Undefined, ImageState::TransferDst);
+            rec.copy_mip0(&source, &cube);
+            rec.transition(&cube, 0..1, ImageState::TransferDst, ImageState::FragmentRead);
+            rec.transition(&source, 0..source_levels, ImageState::TransferSrc, ImageState::ComputeRead);
+            rec.end_label();
+
+            rec.begin_label("GGX prefilter");
+            let mips = 1..desc.mip_count;
+            rec.transition(&cube, mips.clone(), ImageState::Undefined, ImageState::ComputeWrite);
+            rec.bind_pipeline(&prefilter.pipeline);
+            for (mip, _, set) in &targets {
+                let r = *mip as f32 / (desc.mip_count - 1) as f32;
+                let (w, _, _) = cube.desc.mip_extent(*mip);
+                rec.bind_set(&prefilter.pipeline, &prefilter.layout, 0, set);
+                rec.push_constants(
+                    &prefilter.layout,
+                    &PrefilterPush {
+                        alpha: r * r,
+                        source_size: size,
+                        destination_size: w,
+                        sample_count: desc.samples,
+                    },
+                );
+                rec.dispatch(super::groups(w), super::groups(w), 6);
+            }
+            rec.transition(&cube, mips, ImageState::ComputeWrite, ImageState::FragmentRead);
+            rec.end_label();
+            Ok(())
+        })?;
+
+        let view = cube.view("environment prefiltered cube")?;
+        Ok(Self { cube, view, desc })
+    }
+
+    /// Reads mip `mip` back as RGBA f32 texels, face-major (faces in Vulkan order), rows top to
+    /// bottom.
+    pub fn read_mip(&self, gpu: &Gpu, mip: u32) -> Result<Vec<[f32; 4]>> {
+        let bytes =
+            crate::vk::read_image_mip(&gpu.device, &self.cube, mip, ImageState::FragmentRead)?;
+        let halves: &[f16] = bytemuck::cast_slice(&bytes);
+        Ok(halves
+            .chunks_exact(4)
+            .map(|c| [c[0].to_f32(), c[1].to_f32(), c[2].to_f32(), c[3].to_f32()])
+            .collect())
+    }
+}
+
+/// Direction through cube face `face` at face coordinates (u, v) ∈ [0,1]²: the CPU mirror of
+/// `cube_direction` in `glsl/include/lib/cubemap.glsl` (Vulkan face order and orientation).
+pub fn cube_direction(face: u32, u: f64, v: f64) -> DVec3 {
+    let (x, y) = (2.0 * u - 1.0, 2.0 * v - 1.0);
+    let d = match face {
+        0 => DVec3::new(1.0, -y, -x),
+        1 => DVec3::new(-1.0, -y, x),
+        2 => DVec3::new(x, 1.0, y),
+        3 => DVec3::new(x, -1.0, -y),
+        4 => DVec3::new(x, -y, 1.0),
+        _ => DVec3::new(-x, -y, -1.0),
+    };
+    d.normalize()
+}
+
+/// Equirect texture coordinates of unit direction `d`: the CPU mirror of `equirect_uv` in
+/// `glsl/include/lib/equirect.glsl`.
+pub fn equirect_uv(d: DVec3) -> (f64, f64) {
+    let u = d.x.atan2(-d.z) / (2.0 * PI) + 0.5;
+    let v = d.y.clamp(-1.0, 1.0).acos() / PI;
+    (u, v)
+}
+
+/// A bilinear lookup: the filtered value and, per channel, the spread (max − min) of the four
+/// texels it blends. A sampler whose weights carry `b` fractional bits can differ from the
+/// exact blend by at most spread·2⁻ᵇ.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bilinear {
+    pub value: [f64; 3],
+    pub spread: [f64; 3],
+}
+
+/// Bilinear lookup of `image` at (u, v) with the sampler `SamplerDesc::equirect` describes:
+/// u wraps, v clamps, texel centres at (i + ½)/n.
+pub fn sample_bilinear(image: &HdrImage, u: f64, v: f64) -> Bilinear {
+    let (w, h) = (image.width as i64, image.height as i64);
+    let x = u * w as f64 - 0.5;
+    let y = v * h as f64 - 0.5;
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let texel = |xi: i64, yi: i64| {
+        let xi = xi.rem_euclid(w);
+        let yi = yi.clamp(0, h - 1);
+        let p = image.pixels[(yi * w + xi) as usize];
+        [p[0] as f64, p[1] as f64, p[2] as f64]
+    };
+    let (x0, y0) = (x0 as i64, y0 as i64);
+    let mut out = [0.0; 3];
+    let mut low = [f64::INFINITY; 3];
+    let mut high = [f64::NEG_INFINITY; 3];
+    for (dx, dy, wgt) in [
+        (0, 0, (1.0 - fx) * (1.0 - fy)),
+        (1, 0, fx * (1.0 - fy)),
+        (0, 1, (1.0 - fx) * fy),
+        (1, 1, fx * fy),
+    ] {
+        let t = texel(x0 + dx, y0 + dy);
+        for c in 0..3 {
+            out[c] += wgt * t[c];
+            low[c] = low[c].min(t[c]);
+            high[c] = high[c].max(t[c]);
+        }
+    }
+    Bilinear {
+        value: out,
+        spread: std::array::from_fn(|c| high[c] - low[c]),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cube_faces_point_along_their_axes() {
+        let axes = [DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z];
+        for (face, axis) in axes.iter().enumerate() {
+            let d = cube_direction(face as u32, 0.5, 0.5);
+            assert!((d - *axis).length() < 1e-12, "face {face}: {d}");
+        }
+    }
+
+    #[test]
+    fn equirect_mapping_covers_the_sphere() {
+        let (u, v) = equirect_uv(DVec3::Y);
+        assert!(v.abs() < 1e-12, "{u} {v}");
+        let (u, v) = equirect_uv(-DVec3::Z);
+        assert!((u - 0.5).abs() < 1e-12 && (v - 0.5).abs() < 1e-12);
+        let (u, _) = equirect_uv(DVec3::X);
+        assert!((u - 0.75).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,321 @@
+//! Pipeline layouts, compute and graphics pipelines, and specialization constants.
+//!
+//! Specialization constants come from a `#[repr(C)]` + `Pod` struct whose map entries are built
+//! with `offset_of!` by [`spec_constants!`](crate::spec_constants), so the host struct is the one
+//! source of truth for ids and offsets and a pipeline is created from a struct literal.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use ash::vk;
+
+use super::descriptor::{DescriptorSetLayout, Stages};
+use super::device::Device;
+use super::error::{Check, VkError, VkResult};
+
+/// One specialization constant: its `constant_id` and where it lives in the host struct.
+#[derive(Clone, Copy, Debug)]
+pub struct SpecEntry {
+    pub id: u32,
+    pub offset: usize,
+    pub size: usize,
+}
+
+/// A `#[repr(C)]` struct of 32-bit specialization constants.
+pub trait SpecConstants: bytemuck::Pod {
+    const ENTRIES: &'static [SpecEntry];
+}
+
+/// No specialization constants.
+impl SpecConstants for () {
+    const ENTRIES: &'static [SpecEntry] = &[];
+}
+
+/// Implements [`SpecConstants`] for a `#[repr(C)]` struct of `u32` fields:
+/// `spec_constants!(MySpec { max_layers = 0, model = 1 });`
+#[macro_export]
+macro_rules! spec_constants {
+    ($ty:ty { $($field:ident = $id:expr),* $(,)? }) => {
+        impl $crate::vk::SpecConstants for $ty {
+            const ENTRIES: &'static [$crate::vk::SpecEntry] = &[
+                $($crate::vk::SpecEntry {
+                    id: $id,
+                    offset: ::core::mem::offset_of!($ty, $field),
+                    size: 4,
+                }),*
+            ];
+        }
+    };
+}
+
+fn map_entries<S: SpecConstants>() -> Vec<vk::SpecializationMapEntry> {
+    S::ENTRIES
+        .iter()
+        .map(|e| vk::SpecializationMapEntry {
+            constant_id: e.id,
+            offset: e.offset as u32,
+            size: e.size,
+        })
+        .collect()
+}
+
+/// A shader module that lives only while a pipeline is created.
+struct ShaderModule<'a> {
+    device: &'a Device,
+    raw: vk::ShaderModule,
+}
+
+impl<'a> ShaderModule<'a> {
+    fn new(device: &'a Device, spirv: &[u32]) -> VkResult<Self> {
+        let info = vk::ShaderModuleCreateInfo::default().code(spirv);
+        // SAFETY: `spirv` comes from shaderc, which emits valid SPIR-V words.
+        let raw = unsafe { device.raw.create_shader_module(&info, None) }
+            .check("vkCreateShaderModule")?;
+        Ok(Self { device, raw })
+    }
+}
+
+impl Drop for ShaderModule<'_> {
+    fn drop(&mut self) {
+        // SAFETY: modules may be destroyed once the pipelines using them are created.
+        unsafe { self.device.raw.destroy_shader_module(self.raw, None) };
+    }
+}
+
+pub struct PipelineLayout {
+    device: Arc<Device>,
+    pub(crate) raw: vk::PipelineLayout,
+    pub(crate) push_stages: vk::ShaderStageFlags,
+}
+
+impl PipelineLayout {
+    /// `push_constant_bytes` = 0 means no push constants.
+    pub fn new(
+        device: &Arc<Device>,
+        sets: &[&DescriptorSetLayout],
+        push_constant_bytes: u32,
+        stages: Stages,
+        name: &str,
+    ) -> VkResult<Self> {
+        let set_layouts: Vec<_> = sets.iter().map(|s| s.raw).collect();
+        let ranges = [vk::PushConstantRange {
+            stage_flags: stages.raw(),
+            offset: 0,
+            size: push_constant_bytes,
+        }];
+        let info = vk::PipelineLayoutCreateInfo::default()
+            .set_layouts(&set_layouts)
+            .push_constant_ranges(if push_constant_bytes > 0 {
+                &ranges
+            } else {
+                &[]
+            });
+        // SAFETY: valid create info on a live device.
+        let raw = unsafe { device.raw.create_pipeline_layout(&info, None) }
+            .check("vkCreatePipelineLayout")?;
+        device.set_name(raw, name);
+        Ok(Self {
+            device: device.clone(),
+            raw,
+            push_stages: stages.raw(),
+        })
+    }
+}
+
+impl Drop for PipelineLayout {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            return;
+        }
+        // SAFETY: module invariant: no pending GPU work uses the layout.
+        unsafe { self.device.raw.destroy_pipeline_layout(self.raw, None) };
+    }
+}
+
+/// A compute or graphics pipeline, and how long the driver took to build it.
+pub struct Pipeline {
+    device: Arc<Device>,
+    pub(crate) raw: vk::Pipeline,
+    pub(crate) bind_point: vk::PipelineBindPoint,
+    pub creation_time: Duration,
+}
+
+impl Pipeline {
+    pub fn compute<S: SpecConstants>(
+        device: &Arc<Device>,
+        layout: &PipelineLayout,
+        spirv: &[u32],
+        spec: &S,
+        name: &str,
+    ) -> VkResult<Self> {
+        let module = ShaderModule::new(device, spirv)?;
+        let entries = map_entries::<S>();
+        let spec_info = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(bytemuck::bytes_of(spec));
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module.raw)
+            .name(c"main")
+            .specialization_info(&spec_info);
+        let info = vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(layout.raw)
+            .flags(capture_flags(device));
+        let start = Instant::now();
+        // SAFETY: all pointers borrow locals that outlive the call.
+        let raw = unsafe {
+            device
+                .raw
+                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+        }
+        .map_err(|(_, result)| VkError::Vk {
+            call: "vkCreateComputePipelines",
+            result,
+        })?[0];
+        let creation_time = start.elapsed();
+        device.set_name(raw, name);
+        Ok(Self {
+            device: device.clone(),
+            raw,
+            bind_point: vk::PipelineBindPoint::COMPUTE,
+            creation_time,
+        })
+    }
+
+    pub fn graphics<S: SpecConstants>(
+        device: &Arc<Device>,
+        layout: &PipelineLayout,
+        desc: &GraphicsDesc<'_>,
+        spec: &S,
+        name: &str,
+    ) -> VkResult<Self> {
+        let vertex = ShaderModule::new(device, desc.vertex)?;
+        let fragment = ShaderModule::new(device, desc.fragment)?;
+        let entries = map_entries::<S>();
+        let spec_info = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(bytemuck::bytes_of(spec));
+        let stages = [
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(vertex.raw)
+                .name(c"main")
+                .specialization_info(&spec_info),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::FRAGMENT)
+                .module(fragment.raw)
+                .name(c"main")
+                .specialization_info(&spec_info),
+        ];
+        let bindings = [vk::VertexInputBindingDescription {
+            binding: 0,
+            stride: desc.vertex_stride,
+            input_rate: vk::VertexInputRate::VERTEX,
+        }];
+        let attributes: Vec<_> = desc
+            .attributes
+            .iter()
+            .map(|&(location, format, offset)| vk::VertexInputAttributeDescription {
+                location,
+                binding: 0,
+                format,
+                offset,
+            })
+            .collect();
+        let vertex_input = if desc.vertex_stride > 0 {
+            vk::PipelineVertexInputStateCreateInfo::default()
+                .vertex_binding_descriptions(&bindings)
+                .vertex_attribute_descriptions(&attributes)
+        } else {
+            vk::PipelineVertexInputStateCreateInfo::default()
+        };
+        let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
+            .viewport_count(1)
+            .scissor_count(1);
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(if desc.cull_back {
+                vk::CullModeFlags::BACK
+            } else {
+                vk::CullModeFlags::NONE
+            })
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
+            .color_write_mask(vk::ColorComponentFlags::RGBA)];
+        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let color_formats = [desc.color_format];
+        let mut rendering =
+            vk::PipelineRenderingCreateInfo::default().color_attachment_formats(&color_formats);
+        let info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&input_assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(layout.raw)
+            .flags(capture_flags(device))
+            .push_next(&mut rendering);
+        let start = Instant::now();
+        // SAFETY: all pointers borrow locals that outlive the call.
+        let raw = unsafe {
+            device
+                .raw
+                .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+        }
+        .map_err(|(_, result)| VkError::Vk {
+            call: "vkCreateGraphicsPipelines",
+            result,
+        })?[0];
+        let creation_time = start.elapsed();
+        device.set_name(raw, name);
+        Ok(Self {
+            device: device.clone(),
+            raw,
+            bind_point: vk::PipelineBindPoint::GRAPHICS,
+            creation_time,
+        })
+    }
+}
+
+/// Ask the driver to keep executable statistics where it can report them.
+fn capture_flags(device: &Device) -> vk::PipelineCreateFlags {
+    if device.exec_props.is_some() {
+        vk::PipelineCreateFlags::CAPTURE_STATISTICS_KHR
+    } else {
+        vk::PipelineCreateFlags::empty()
+    }
+}
+
+impl Drop for Pipeline {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            return;
+        }
+        // SAFETY: module invariant: no pending GPU work uses the pipeline.
+        unsafe { self.device.raw.destroy_pipeline(self.raw, None) };
+    }
+}
+
+/// Fixed-function state of lamina's graphics pipelines: one colour attachment, no blending,
+/// dynamic viewport and scissor.
+pub struct GraphicsDesc<'a> {
+    pub vertex: &'a [u32],
+    pub fragment: &'a [u32],
+    /// 0: no vertex buffer (positions generated from the vertex index).
+    pub vertex_stride: u32,
+    /// (location, format, byte offset) of each attribute.
+    pub attributes: &'a [(u32, vk::Format, u32)],
+    pub color_format: vk::Format,
+    pub cull_back: bool,
+}

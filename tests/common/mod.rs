@@ -1,0 +1,40 @@
+//! Shared by the integration tests: a validated device on lavapipe (or whatever is present) and
+//! the rule that any validation message fails the test.
+#![allow(dead_code, reason = "each test binary uses a different subset")]
+
+use std::path::PathBuf;
+
+use lamina::imageio::{self, HdrImage};
+use lamina::Gpu;
+
+/// A device with the Khronos validation layer on.
+pub fn gpu() -> Gpu {
+    Gpu::validated().expect("a Vulkan device with the validation layer (run scripts/setup.sh)")
+}
+
+/// Fails when the validation layer said anything of warning or error severity.
+pub fn assert_validation_clean(gpu: &Gpu) {
+    let messages = gpu.device.instance().messages();
+    assert_eq!(
+        messages.problems(),
+        0,
+        "validation layer messages: {:?}",
+        messages.first_errors()
+    );
+}
+
+pub fn repo_path(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(rel)
+}
+
+pub fn studio() -> HdrImage {
+    imageio::read_exr(&repo_path("assets/env/studio.exr")).expect("bundled environment map")
+}
+
+/// A fresh, empty directory under the target directory for one test's files.
+pub fn scratch_dir(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create scratch dir");
+    dir
+}

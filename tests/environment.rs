@@ -1,0 +1,132 @@
+//! The prefiltered environment and the split-sum table against CPU references.
+
+mod common;
+
+use glam::DVec3;
+use lamina::shader::G2;
+use lamina::tables::environment::{self, EnvDesc, Environment};
+use lamina::tables::split_sum::{self, SplitSumTable};
+
+fn luminance(c: [f32; 4]) -> f64 {
+    0.2126 * c[0] as f64 + 0.7152 * c[1] as f64 + 0.0722 * c[2] as f64
+}
+
+#[test]
+fn prefiltered_mip0_matches_source_and_mips_get_smoother() {
+    let gpu = common::gpu();
+    let studio = common::studio();
+    let desc = EnvDesc {
+        face_size: 128,
+        mip_count: 6,
+        samples: 64,
+    };
+    let env = Environment::build(&gpu, &studio, desc).unwrap();
+
+    let mip0 = env.read_mip(&gpu, 0).unwrap();
+    let n = desc.face_size;
+    // Per-texel bound, in units of the spread of the four texels a bilinear lookup blends:
+    // the sampler's fixed-point weights (subTexelPrecisionBits) move the blend by up to
+    // spread·2⁻ᵇ, and the texel coordinate, computed in f32 through atan/acos (polynomial
+    // approximations on lavapipe), is off by up to 0.023 texel (measured), bounded here by 1/32.
+    // The value is also rounded to half twice (upload and cube store): 2⁻¹⁰ relative.
+    let weight_step = 0.5f64.powi(gpu.device.report.sub_texel_precision_bits as i32) + 1.0 / 32.0;
+    let mut errors = Vec::new();
+    let mut outside = 0usize;
+    let mut worst_outlier = 0.0f64;
+    for face in 0..6 {
+        for j in 0..n {
+            for i in 0..n {
+                let u = (f64::from(i) + 0.5) / f64::from(n);
+                let v = (f64::from(j) + 0.5) / f64::from(n);
+                let d: DVec3 = environment::cube_direction(face, u, v);
+                let (eu, ev) = environment::equirect_uv(d);
+                let want = environment::sample_bilinear(&studio, eu, ev);
+                let got = mip0[((face * n + j) * n + i) as usize];
+                for c in 0..3 {
+                    let err = (got[c] as f64 - want.value[c]).abs();
+                    let bound = want.spread[c] * weight_step
+                        + want.value[c].abs() * 2f64.powi(-10)
+                        + 1e-6;
+                    if err > bound {
+                        outside += 1;
+                        worst_outlier = worst_outlier.max(err / want.value[c].abs().max(1e-3));
+                    }
+                    errors.push(err / (want.value[c].abs() + 1e-2));
+                }
+            }
+        }
+    }
+    errors.sort_by(f64::total_cmp);
+    let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+    let p999 = errors[(errors.len() as f64 * 0.999) as usize];
+    println!(
+        "mip 0 vs source: mean relative error {mean:.5}, 99.9th percentile {p999:.5}, \
+         {outside} of {} values outside the per-texel bound (worst by {worst_outlier:.4} relative)",
+        errors.len()
+    );
+    // On lavapipe 19 of 294912 values (all on the ±X faces, at most 3% off, measured) exceed the
+    // per-texel bound; their cause is not yet understood (recorded on issue #2), so they are
+    // bounded here by count and size rather than hidden in a wider per-texel tolerance.
+    assert!(
+        (outside as f64) < 1e-4 * errors.len() as f64,
+        "{outside} values outside the sampler-precision bound"
+    );
+    assert!(worst_outlier < 5e-2, "an outlier is {worst_outlier} off, relative");
+    assert!(mean < 2e-3, "mean relative error {mean}");
+
+    let mut variances = Vec::new();
+    for mip in 0..desc.mip_count {
+        let texels = env.read_mip(&gpu, mip).unwrap();
+        let lum: Vec<f64> = texels.iter().map(|&t| luminance(t)).collect();
+        let mean = lum.iter().sum::<f64>() / lum.len() as f64;
+        let var = lum.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / lum.len() as f64;
+        println!("mip {mip}: mean luminance {mean:.4}, variance {var:.6}");
+        variances.push(var);
+    }
+    for (m, pair) in variances.windows(2).enumerate() {
+        assert!(pair[1] < pair[0], "mip {} is not smoother than mip {m}", m + 1);
+    }
+    common::assert_validation_clean(&gpu);
+}
+
+#[test]
+fn split_sum_table_matches_cpu_monte_carlo() {
+    let gpu = common::gpu();
+    let table = SplitSumTable::build(
+        &gpu,
+        G2::HeightCorrelated,
+        split_sum::DEFAULT_SIZE,
+        split_sum::DEFAULT_SAMPLES,
+    )
+    .unwrap();
+    let points = [
+        (0, 0),
+        (1, 5),
+        (5, 40),
+        (13, 63),
+        (20, 10),
+        (31, 31),
+        (40, 55),
+        (50, 2),
+        (63, 63),
+        (63, 20),
+        (10, 25),
+        (58, 45),
+    ];
+    let mut worst = 0.0f64;
+    for (i, j) in points {
+        let (mu, alpha) = table.coordinates(i, j);
+        let want = split_sum::cpu_reference(mu, alpha, G2::HeightCorrelated, 256);
+        let got = table.texel(i, j);
+        for c in 0..2 {
+            let err = (got[c] as f64 - want[c]).abs();
+            worst = worst.max(err);
+            assert!(
+                err < 1e-2,
+                "texel ({i}, {j}) μ={mu:.3} α={alpha:.4}: GPU {got:?} vs CPU {want:?}"
+            );
+        }
+    }
+    println!("split-sum GPU vs CPU: max abs error {worst:.2e} over {} points", points.len());
+    common::assert_validation_clean(&gpu);
+}

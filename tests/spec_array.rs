@@ -1,0 +1,43 @@
+//! A function-local array sized by the `max_layers` specialization constant has exactly that
+//! size on the device.
+
+mod common;
+
+use lamina::gpu::ComputeKernel;
+use lamina::shader::VariantKey;
+use lamina::vk::{submit_and_wait, Access, BindingKind, Buffer, BufferDesc, DescriptorSet, Resource};
+
+#[test]
+fn spec_constant_sizes_the_local_array() {
+    let gpu = common::gpu();
+    for max_layers in [1u32, 2, 4, 8, 16] {
+        let variant = VariantKey {
+            max_layers,
+            ..VariantKey::default()
+        };
+        let kernel = ComputeKernel::new(
+            &gpu,
+            "spec_array.comp.glsl",
+            &[BindingKind::StorageBuffer],
+            0,
+            &variant.spec(),
+        )
+        .unwrap();
+        let result = Buffer::new(&gpu.device, BufferDesc::readback(8), "result").unwrap();
+        let mut set = DescriptorSet::new(&gpu.device, &kernel.set_layout, "spec array").unwrap();
+        set.write(0, Resource::Buffer(&result));
+        submit_and_wait(&gpu.device, "spec array", |rec| {
+            rec.bind_pipeline(&kernel.pipeline);
+            rec.bind_set(&kernel.pipeline, &kernel.layout, 0, &set);
+            rec.dispatch(1, 1, 1);
+            rec.barrier(Access::ComputeWrite, Access::HostRead);
+            Ok(())
+        })
+        .unwrap();
+        let [length, sum]: [u32; 2] = result.read::<u32>().try_into().unwrap();
+        println!("max_layers={max_layers}: length {length}, sum {sum}");
+        assert_eq!(length, max_layers);
+        assert_eq!(sum, max_layers * (max_layers + 1) / 2);
+    }
+    common::assert_validation_clean(&gpu);
+}
