@@ -107,8 +107,17 @@ pub fn write_atomically(
 }
 
 /// Writes RGBA half-float pixels (rows top to bottom) as an OpenEXR file.
-pub fn write_exr_rgba16f(path: &Path, width: usize, height: usize, pixels: &[[f16; 4]]) -> Result<()> {
-    assert_eq!(pixels.len(), width * height, "pixel count must match the size");
+pub fn write_exr_rgba16f(
+    path: &Path,
+    width: usize,
+    height: usize,
+    pixels: &[[f16; 4]],
+) -> Result<()> {
+    assert_eq!(
+        pixels.len(),
+        width * height,
+        "pixel count must match the size"
+    );
     write_atomically(path, |temp| {
         exr::prelude::write_rgba_file(temp, width, height, |x, y| {
             let p = pixels[y * width + x];
@@ -174,7 +183,8 @@ mod tests {
     use super::*;
 
     fn temp_dir(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("lamina-imageio-{name}-{}", std::process::id()));
+        let dir =
+            std::env::temp_dir().join(format!("lamina-imageio-{name}-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         dir
     }
@@ -214,7 +224,10 @@ mod tests {
         let e = read_exr(&bad).unwrap_err().to_string();
         assert!(e.contains("bad.exr") && e.contains("OpenEXR"), "{e}");
         let e = read_exr(&dir.join("missing.exr")).unwrap_err().to_string();
-        assert!(e.contains("missing.exr") && e.contains("no such file"), "{e}");
+        assert!(
+            e.contains("missing.exr") && e.contains("no such file"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -1,13 +1,13 @@
 //! lamina: layered materials with the transfer-matrix model on Vulkan, measured.
 //!
 //! Module map (DESIGN.md §3):
-//! - [`vk`]: the only module with raw `ash` — instance, device, memory, pipelines, queries;
-//! - [`shader`]: GLSL → SPIR-V with shaderc, and the typed variant key;
-//! - [`tables`]: GPU-built tables (prefiltered environment, split-sum) with CPU references;
-//! - [`render`]: passes (sky, shaded sphere), the scene and readback;
-//! - [`model`]: the CPU reference in f64;
-//! - [`material`]: layers;
-//! - [`imageio`]: EXR/PNG input and atomic output.
+//! - [`vk`] — the only module with raw `ash` — instance, device, memory, pipelines, queries;
+//! - [`shader`] — GLSL → SPIR-V with shaderc, and the typed variant key;
+//! - [`tables`] — GPU-built tables (prefiltered environment, split-sum) with CPU references;
+//! - [`render`] — passes (sky, shaded sphere), the scene and readback;
+//! - [`model`] — the CPU reference in f64;
+//! - [`material`] — layers;
+//! - [`imageio`] — EXR/PNG input and atomic output.
 #![warn(unsafe_op_in_unsafe_fn)]
 
 pub mod error;

@@ -16,7 +16,11 @@ use lamina::vk::{DeviceSelector, InstanceDesc};
 use lamina::Gpu;
 
 #[derive(Parser)]
-#[command(name = "lamina", version, about = "Transfer-matrix layered materials on Vulkan, measured")]
+#[command(
+    name = "lamina",
+    version,
+    about = "Transfer-matrix layered materials on Vulkan, measured"
+)]
 struct Cli {
     /// Vulkan device: index (see `lamina devices`) or part of its name.
     #[arg(long, global = true, value_name = "INDEX|NAME")]
@@ -56,6 +60,10 @@ struct RenderArgs {
     /// Tone-mapped PNG output.
     #[arg(long, value_name = "FILE.png", default_value = "out/render.png")]
     png: PathBuf,
+    /// Frames rendered and discarded before the measured one (the first frame on lavapipe
+    /// includes the shader's JIT compilation).
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    warmup: u32,
     /// Exposure of the PNG, in stops.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     exposure: f32,
@@ -125,7 +133,10 @@ fn devices(cli: &Cli) -> Result<()> {
     })?;
     for d in lamina::vk::enumerate(&instance)? {
         println!("[{}] {} ({})", d.index, d.name, d.device_type);
-        println!("    driver:                 {} — {}", d.driver_name, d.driver_info);
+        println!(
+            "    driver:                 {} — {}",
+            d.driver_name, d.driver_info
+        );
         println!("    Vulkan API:             {}", d.api_version);
         println!("    vendor id:              {:#06x}", d.vendor_id);
         println!("    shaderFloat16 (fp16):   {}", yes(d.shader_float16));
@@ -156,6 +167,9 @@ fn render(cli: &Cli, args: &RenderArgs) -> Result<()> {
     let mut renderer = Renderer::new(&gpu, &equirect, EnvDesc::default())?;
     let pass = renderer.prepare(args.variant)?;
     let layer = Layer::default();
+    for _ in 0..args.warmup {
+        renderer.render(&pass, &layer, args.size.width, args.size.height)?;
+    }
     let frame = renderer.render(&pass, &layer, args.size.width, args.size.height)?;
     if let Some(i) = frame
         .pixels
@@ -176,10 +190,16 @@ fn render(cli: &Cli, args: &RenderArgs) -> Result<()> {
     imageio::write_exr_rgba16f(&args.out, w, h, &frame.pixels)?;
     imageio::write_png_tonemapped(&args.png, w, h, &frame.pixels, args.exposure)?;
 
-    println!("device:      {} ({})", gpu.device.report.name, gpu.device.report.driver_info);
+    println!(
+        "device:      {} ({})",
+        gpu.device.report.name, gpu.device.report.driver_info
+    );
     println!("environment: {}", env_path.display());
     println!("variant:     {}", args.variant);
-    println!("size:        {}x{}", frame.width, frame.height);
+    println!(
+        "size:        {}x{} (measured after {} warm-up frame(s))",
+        frame.width, frame.height, args.warmup
+    );
     let invocations = |n: Option<u64>| n.map_or("n/a".to_string(), |n| n.to_string());
     println!(
         "shaded draw: {:.3} ms GPU, {} fragment invocations",
@@ -191,7 +211,11 @@ fn render(cli: &Cli, args: &RenderArgs) -> Result<()> {
         frame.sky.duration.as_ms(),
         invocations(frame.sky.fragment_invocations)
     );
-    println!("wrote:       {}, {}", args.out.display(), args.png.display());
+    println!(
+        "wrote:       {}, {}",
+        args.out.display(),
+        args.png.display()
+    );
     Ok(())
 }
 

@@ -11,14 +11,24 @@ fn device_is_created_and_reports_lamina_features() {
     println!("{report:#?}");
     assert!(!report.name.is_empty());
     let (major, minor) = {
-        let mut parts = report.api_version.split('.').map(|p| p.parse::<u32>().unwrap());
+        let mut parts = report
+            .api_version
+            .split('.')
+            .map(|p| p.parse::<u32>().unwrap());
         (parts.next().unwrap(), parts.next().unwrap())
     };
-    assert!((major, minor) >= (1, 3), "Vulkan {} < 1.3", report.api_version);
+    assert!(
+        (major, minor) >= (1, 3),
+        "Vulkan {} < 1.3",
+        report.api_version
+    );
     assert!(report.dynamic_rendering && report.synchronization2 && report.host_query_reset);
     assert!(report.timestamps, "lamina measures with timestamps");
     assert!(report.timestamp_valid_bits > 0 && report.timestamp_period_ns > 0.0);
-    assert!(report.pipeline_statistics, "lamina counts fragment invocations");
+    assert!(
+        report.pipeline_statistics,
+        "lamina counts fragment invocations"
+    );
     common::assert_validation_clean(&gpu);
 }
 
@@ -28,7 +38,9 @@ fn every_glsl_entry_point_compiles() {
     let entries = entry_points();
     assert!(entries.contains(&"forward.frag.glsl"), "{entries:?}");
     for entry in &entries {
-        let spirv = compiler.compile(entry, &[]).unwrap_or_else(|e| panic!("{e}"));
+        let spirv = compiler
+            .compile(entry, &[])
+            .unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(spirv[0], 0x0723_0203, "{entry}: not SPIR-V");
     }
     // The variant-compiled entries also build with every define a variant can set.

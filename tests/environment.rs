@@ -42,16 +42,14 @@ fn prefiltered_mip0_matches_source_and_mips_get_smoother() {
                 let (eu, ev) = environment::equirect_uv(d);
                 let want = environment::sample_bilinear(&studio, eu, ev);
                 let got = mip0[((face * n + j) * n + i) as usize];
-                for c in 0..3 {
-                    let err = (got[c] as f64 - want.value[c]).abs();
-                    let bound = want.spread[c] * weight_step
-                        + want.value[c].abs() * 2f64.powi(-10)
-                        + 1e-6;
+                for ((&g, value), spread) in got.iter().zip(want.value).zip(want.spread) {
+                    let err = (f64::from(g) - value).abs();
+                    let bound = spread * weight_step + value.abs() * 2f64.powi(-10) + 1e-6;
                     if err > bound {
                         outside += 1;
-                        worst_outlier = worst_outlier.max(err / want.value[c].abs().max(1e-3));
+                        worst_outlier = worst_outlier.max(err / value.abs().max(1e-3));
                     }
-                    errors.push(err / (want.value[c].abs() + 1e-2));
+                    errors.push(err / (value.abs() + 1e-2));
                 }
             }
         }
@@ -71,7 +69,10 @@ fn prefiltered_mip0_matches_source_and_mips_get_smoother() {
         (outside as f64) < 1e-4 * errors.len() as f64,
         "{outside} values outside the sampler-precision bound"
     );
-    assert!(worst_outlier < 5e-2, "an outlier is {worst_outlier} off, relative");
+    assert!(
+        worst_outlier < 5e-2,
+        "an outlier is {worst_outlier} off, relative"
+    );
     assert!(mean < 2e-3, "mean relative error {mean}");
 
     let mut variances = Vec::new();
@@ -84,7 +85,11 @@ fn prefiltered_mip0_matches_source_and_mips_get_smoother() {
         variances.push(var);
     }
     for (m, pair) in variances.windows(2).enumerate() {
-        assert!(pair[1] < pair[0], "mip {} is not smoother than mip {m}", m + 1);
+        assert!(
+            pair[1] < pair[0],
+            "mip {} is not smoother than mip {m}",
+            m + 1
+        );
     }
     common::assert_validation_clean(&gpu);
 }
@@ -127,6 +132,9 @@ fn split_sum_table_matches_cpu_monte_carlo() {
             );
         }
     }
-    println!("split-sum GPU vs CPU: max abs error {worst:.2e} over {} points", points.len());
+    println!(
+        "split-sum GPU vs CPU: max abs error {worst:.2e} over {} points",
+        points.len()
+    );
     common::assert_validation_clean(&gpu);
 }

@@ -10,7 +10,10 @@ use lamina::tables::environment::{self, EnvDesc};
 
 /// World-space view ray through the centre of pixel (x, y), as the sky shader reconstructs it.
 fn view_ray(renderer: &Renderer, x: u32, y: u32, width: u32, height: u32) -> Vec3 {
-    let inv = renderer.camera.view_proj(width as f32 / height as f32).inverse();
+    let inv = renderer
+        .camera
+        .view_proj(width as f32 / height as f32)
+        .inverse();
     let ndc = Vec4::new(
         2.0 * (x as f32 + 0.5) / width as f32 - 1.0,
         2.0 * (y as f32 + 0.5) / height as f32 - 1.0,

@@ -5,7 +5,9 @@ mod common;
 
 use lamina::gpu::ComputeKernel;
 use lamina::shader::VariantKey;
-use lamina::vk::{submit_and_wait, Access, BindingKind, Buffer, BufferDesc, DescriptorSet, Resource};
+use lamina::vk::{
+    submit_and_wait, Access, BindingKind, Buffer, BufferDesc, DescriptorSet, Resource,
+};
 
 #[test]
 fn spec_constant_sizes_the_local_array() {

@@ -161,7 +161,12 @@ impl<'g> Renderer<'g> {
         let mut profiler = GpuProfiler::new(device, 2, "frame")?;
 
         submit_and_wait(device, "frame", |rec| {
-            rec.transition(&target, 0..1, ImageState::Undefined, ImageState::ColorAttachment);
+            rec.transition(
+                &target,
+                0..1,
+                ImageState::Undefined,
+                ImageState::ColorAttachment,
+            );
             rec.bind_pipeline(&self.sky.pipeline);
             rec.bind_set(&self.sky.pipeline, &self.layout, 0, &set);
             let scope = profiler
@@ -183,7 +188,12 @@ impl<'g> Renderer<'g> {
             rec.end_rendering();
             profiler.end(rec, scope);
 
-            rec.transition(&target, 0..1, ImageState::ColorAttachment, ImageState::TransferSrc);
+            rec.transition(
+                &target,
+                0..1,
+                ImageState::ColorAttachment,
+                ImageState::TransferSrc,
+            );
             rec.copy_image_to_buffer(&target, 0, &readback);
             rec.barrier(Access::TransferWrite, Access::HostRead);
             Ok(())

@@ -50,7 +50,11 @@ pub fn uv_sphere(stacks: u32, slices: u32) -> Mesh {
         let theta = std::f32::consts::PI * i as f32 / stacks as f32;
         for j in 0..=slices {
             let phi = std::f32::consts::TAU * j as f32 / slices as f32;
-            let p = [theta.sin() * phi.sin(), theta.cos(), theta.sin() * phi.cos()];
+            let p = [
+                theta.sin() * phi.sin(),
+                theta.cos(),
+                theta.sin() * phi.cos(),
+            ];
             vertices.push(Vertex {
                 position: p,
                 normal: p,

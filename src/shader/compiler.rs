@@ -108,9 +108,8 @@ impl ShaderCompiler {
 
     /// Compiles `entry` (a path under `glsl/`) with extra `defines` (name, value).
     pub fn compile(&self, entry: &str, defines: &[(&str, &str)]) -> Result<Vec<u32>, ShaderError> {
-        let text = source(entry).ok_or_else(|| {
-            ShaderError::UnknownEntry(entry.into(), entry_points().join(", "))
-        })?;
+        let text = source(entry)
+            .ok_or_else(|| ShaderError::UnknownEntry(entry.into(), entry_points().join(", ")))?;
         self.compile_source(entry, text, defines)
     }
 
@@ -125,7 +124,10 @@ impl ShaderCompiler {
         let kind = stage_of(entry)?;
         let mut options =
             shaderc::CompileOptions::new().map_err(|e| ShaderError::Init(e.to_string()))?;
-        options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_3 as u32);
+        options.set_target_env(
+            shaderc::TargetEnv::Vulkan,
+            shaderc::EnvVersion::Vulkan1_3 as u32,
+        );
         options.set_optimization_level(shaderc::OptimizationLevel::Performance);
         options.set_include_callback(|requested, _kind, requester, _depth| {
             resolve_include(requested, requester)
@@ -166,8 +168,11 @@ mod tests {
         let c = ShaderCompiler::new().unwrap();
         let err = c.compile("does-not-exist.comp.glsl", &[]).unwrap_err();
         assert!(matches!(err, ShaderError::UnknownEntry(..)));
-        let broken = "#version 460\n#include \"lib/math.glsl\"\nvoid main() { undefined_thing(); }\n";
-        let err = c.compile_source("broken.comp.glsl", broken, &[]).unwrap_err();
+        let broken =
+            "#version 460\n#include \"lib/math.glsl\"\nvoid main() { undefined_thing(); }\n";
+        let err = c
+            .compile_source("broken.comp.glsl", broken, &[])
+            .unwrap_err();
         let text = err.to_string();
         assert!(text.contains("broken.comp.glsl:3:"), "{text}");
         assert!(text.contains("undefined_thing"), "{text}");

@@ -353,9 +353,15 @@ mod tests {
         assert!(e.contains("modle") && e.contains("max_layers"), "{e}");
         let e = "model=phong".parse::<VariantKey>().unwrap_err().to_string();
         assert!(e.contains("phong") && e.contains("tm6"), "{e}");
-        let e = "max_layers=0".parse::<VariantKey>().unwrap_err().to_string();
+        let e = "max_layers=0"
+            .parse::<VariantKey>()
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("1..=16"), "{e}");
-        let e = "max_layers=17".parse::<VariantKey>().unwrap_err().to_string();
+        let e = "max_layers=17"
+            .parse::<VariantKey>()
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("17"), "{e}");
         let e = "fp16=yes".parse::<VariantKey>().unwrap_err().to_string();
         assert!(e.contains("on, off"), "{e}");

@@ -155,26 +155,61 @@ impl Environment {
 
         submit_and_wait(device, "environment", |rec| {
             rec.begin_label("equirect to cube");
-            rec.transition(&source, 0..1, ImageState::Undefined, ImageState::ComputeWrite);
+            rec.transition(
+                &source,
+                0..1,
+                ImageState::Undefined,
+                ImageState::ComputeWrite,
+            );
             rec.bind_pipeline(&convert.pipeline);
             rec.bind_set(&convert.pipeline, &convert.layout, 0, &convert_set);
             rec.push_constants(&convert.layout, &ConvertPush { face_size: size });
             rec.dispatch(super::groups(size), super::groups(size), 6);
-            rec.transition(&source, 0..1, ImageState::ComputeWrite, ImageState::TransferSrc);
+            rec.transition(
+                &source,
+                0..1,
+                ImageState::ComputeWrite,
+                ImageState::TransferSrc,
+            );
             for mip in 1..source_levels {
-                rec.transition(&source, mip..mip + 1, ImageState::Undefined, ImageState::TransferDst);
+                rec.transition(
+                    &source,
+                    mip..mip + 1,
+                    ImageState::Undefined,
+                    ImageState::TransferDst,
+                );
                 rec.blit_mip_down(&source, mip);
-                rec.transition(&source, mip..mip + 1, ImageState::TransferDst, ImageState::TransferSrc);
+                rec.transition(
+                    &source,
+                    mip..mip + 1,
+                    ImageState::TransferDst,
+                    ImageState::TransferSrc,
+                );
             }
             rec.transition(&cube, 0..1, ImageState::Undefined, ImageState::TransferDst);
             rec.copy_mip0(&source, &cube);
-            rec.transition(&cube, 0..1, ImageState::TransferDst, ImageState::FragmentRead);
-            rec.transition(&source, 0..source_levels, ImageState::TransferSrc, ImageState::ComputeRead);
+            rec.transition(
+                &cube,
+                0..1,
+                ImageState::TransferDst,
+                ImageState::FragmentRead,
+            );
+            rec.transition(
+                &source,
+                0..source_levels,
+                ImageState::TransferSrc,
+                ImageState::ComputeRead,
+            );
             rec.end_label();
 
             rec.begin_label("GGX prefilter");
             let mips = 1..desc.mip_count;
-            rec.transition(&cube, mips.clone(), ImageState::Undefined, ImageState::ComputeWrite);
+            rec.transition(
+                &cube,
+                mips.clone(),
+                ImageState::Undefined,
+                ImageState::ComputeWrite,
+            );
             rec.bind_pipeline(&prefilter.pipeline);
             for (mip, _, set) in &targets {
                 let r = *mip as f32 / (desc.mip_count - 1) as f32;
@@ -191,7 +226,12 @@ impl Environment {
                 );
                 rec.dispatch(super::groups(w), super::groups(w), 6);
             }
-            rec.transition(&cube, mips, ImageState::ComputeWrite, ImageState::FragmentRead);
+            rec.transition(
+                &cube,
+                mips,
+                ImageState::ComputeWrite,
+                ImageState::FragmentRead,
+            );
             rec.end_label();
             Ok(())
         })?;
@@ -288,7 +328,14 @@ mod tests {
 
     #[test]
     fn cube_faces_point_along_their_axes() {
-        let axes = [DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z];
+        let axes = [
+            DVec3::X,
+            -DVec3::X,
+            DVec3::Y,
+            -DVec3::Y,
+            DVec3::Z,
+            -DVec3::Z,
+        ];
         for (face, axis) in axes.iter().enumerate() {
             let d = cube_direction(face as u32, 0.5, 0.5);
             assert!((d - *axis).length() < 1e-12, "face {face}: {d}");

@@ -14,8 +14,8 @@ use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::microfacet;
 use crate::shader::{ShadeSpec, VariantKey, G2};
 use crate::vk::{
-    submit_and_wait, upload_image, Access, BindingKind, Buffer, BufferDesc, DescriptorSet,
-    Format, Image, ImageDesc, ImageState, ImageView, Resource,
+    submit_and_wait, upload_image, Access, BindingKind, Buffer, BufferDesc, DescriptorSet, Format,
+    Image, ImageDesc, ImageState, ImageView, Resource,
 };
 
 pub const DEFAULT_SIZE: u32 = 64;
@@ -168,6 +168,9 @@ mod tests {
     #[test]
     fn separable_smith_matches_published_values() {
         let got = cpu_reference(0.5, 0.25, G2::Smith, 400);
-        assert!((got[0] - 0.8329).abs() < 1.5e-3 && (got[1] - 0.0222).abs() < 1.5e-3, "{got:?}");
+        assert!(
+            (got[0] - 0.8329).abs() < 1.5e-3 && (got[1] - 0.0222).abs() < 1.5e-3,
+            "{got:?}"
+        );
     }
 }

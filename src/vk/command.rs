@@ -33,13 +33,7 @@ pub enum ImageState {
 }
 
 impl ImageState {
-    fn parts(
-        self,
-    ) -> (
-        vk::ImageLayout,
-        vk::PipelineStageFlags2,
-        vk::AccessFlags2,
-    ) {
+    fn parts(self) -> (vk::ImageLayout, vk::PipelineStageFlags2, vk::AccessFlags2) {
         use vk::{AccessFlags2 as A, ImageLayout as L, PipelineStageFlags2 as S};
         match self {
             Self::Undefined => (L::UNDEFINED, S::NONE, A::NONE),
@@ -200,7 +194,13 @@ impl Recorder<'_> {
     }
 
     /// Begins dynamic rendering into `target` (in `ColorAttachment` state), clearing it.
-    pub fn begin_rendering(&mut self, target: &ImageView, width: u32, height: u32, clear: [f32; 4]) {
+    pub fn begin_rendering(
+        &mut self,
+        target: &ImageView,
+        width: u32,
+        height: u32,
+        clear: [f32; 4],
+    ) {
         self.begin_rendering_with(target, width, height, Some(clear));
     }
 
@@ -284,7 +284,11 @@ impl Recorder<'_> {
 
     pub fn draw_indexed(&mut self, indices: u32) {
         // SAFETY: as `draw`, with an index buffer bound.
-        unsafe { self.device.raw.cmd_draw_indexed(self.raw, indices, 1, 0, 0, 0) };
+        unsafe {
+            self.device
+                .raw
+                .cmd_draw_indexed(self.raw, indices, 1, 0, 0, 0)
+        };
     }
 
     /// Copies a tightly packed buffer into mip 0, all layers, of `image` (in `TransferDst`).
@@ -421,8 +425,7 @@ impl Recorder<'_> {
 
     /// Opens a debug label (shown by capture tools and in validation messages).
     pub fn begin_label(&mut self, name: &str) {
-        if let (Some(utils), Ok(name)) = (&self.device.debug_utils, std::ffi::CString::new(name))
-        {
+        if let (Some(utils), Ok(name)) = (&self.device.debug_utils, std::ffi::CString::new(name)) {
             let label = vk::DebugUtilsLabelEXT::default().label_name(&name);
             // SAFETY: recording state.
             unsafe { utils.cmd_begin_debug_utils_label(self.raw, &label) };
@@ -495,8 +498,8 @@ impl CommandPool {
             .queue_family_index(device.queue_family)
             .flags(vk::CommandPoolCreateFlags::TRANSIENT);
         // SAFETY: valid create info on a live device.
-        let raw = unsafe { device.raw.create_command_pool(&info, None) }
-            .check("vkCreateCommandPool")?;
+        let raw =
+            unsafe { device.raw.create_command_pool(&info, None) }.check("vkCreateCommandPool")?;
         device.set_name(raw, name);
         Ok(Self {
             device: device.clone(),
@@ -568,7 +571,12 @@ pub fn upload_image(
     let staging = Buffer::with_data(device, vk::BufferUsageFlags::TRANSFER_SRC, bytes, "staging")?;
     submit_and_wait(device, "upload", |rec| {
         let mips = 0..image.desc.mip_levels;
-        rec.transition(image, mips.clone(), ImageState::Undefined, ImageState::TransferDst);
+        rec.transition(
+            image,
+            mips.clone(),
+            ImageState::Undefined,
+            ImageState::TransferDst,
+        );
         rec.copy_buffer_to_image(&staging, image);
         rec.transition(image, mips, ImageState::TransferDst, to);
         Ok(())
@@ -584,7 +592,11 @@ pub fn read_image_mip(
 ) -> VkResult<Vec<u8>> {
     let (w, h, d) = image.desc.mip_extent(mip);
     let size = (w * h * d * image.desc.layers()) as u64 * texel_bytes(image.desc.format);
-    let buffer = Buffer::new(device, super::buffer::BufferDesc::readback(size), "readback")?;
+    let buffer = Buffer::new(
+        device,
+        super::buffer::BufferDesc::readback(size),
+        "readback",
+    )?;
     submit_and_wait(device, "readback", |rec| {
         rec.transition(image, mip..mip + 1, state, ImageState::TransferSrc);
         rec.copy_image_to_buffer(image, mip, &buffer);

@@ -107,11 +107,7 @@ fn report(instance: &ash::Instance, index: usize, pd: vk::PhysicalDevice) -> Dev
     unsafe { instance.get_physical_device_features2(pd, &mut features2) };
     let core = features2.features;
 
-    let exec_props = has_extension(
-        instance,
-        pd,
-        ash::khr::pipeline_executable_properties::NAME,
-    );
+    let exec_props = has_extension(instance, pd, ash::khr::pipeline_executable_properties::NAME);
     let (_, ts_bits) = universal_queue_family(instance, pd).unwrap_or((0, 0));
     DeviceReport {
         index,
@@ -139,8 +135,8 @@ fn report(instance: &ash::Instance, index: usize, pd: vk::PhysicalDevice) -> Dev
 /// Reports for every physical device, in enumeration order.
 pub fn enumerate(instance: &Instance) -> VkResult<Vec<DeviceReport>> {
     // SAFETY: plain enumeration on a live instance.
-    let pds = unsafe { instance.raw.enumerate_physical_devices() }
-        .check("vkEnumeratePhysicalDevices")?;
+    let pds =
+        unsafe { instance.raw.enumerate_physical_devices() }.check("vkEnumeratePhysicalDevices")?;
     Ok(pds
         .iter()
         .enumerate()
@@ -251,8 +247,8 @@ impl Device {
             info = info.push_next(&mut exec);
         }
         // SAFETY: the features requested were reported as supported by `physical`.
-        let raw = unsafe { instance.raw.create_device(physical, &info, None) }
-            .check("vkCreateDevice")?;
+        let raw =
+            unsafe { instance.raw.create_device(physical, &info, None) }.check("vkCreateDevice")?;
         // SAFETY: family and index were requested in `queue_infos`.
         let queue = unsafe { raw.get_device_queue(queue_family, 0) };
 

@@ -138,7 +138,10 @@ impl Image {
     pub fn new(device: &Arc<Device>, desc: ImageDesc, name: &str) -> VkResult<Self> {
         let (image_type, flags) = match desc.kind {
             ImageKind::D2 => (vk::ImageType::TYPE_2D, vk::ImageCreateFlags::empty()),
-            ImageKind::Cube => (vk::ImageType::TYPE_2D, vk::ImageCreateFlags::CUBE_COMPATIBLE),
+            ImageKind::Cube => (
+                vk::ImageType::TYPE_2D,
+                vk::ImageCreateFlags::CUBE_COMPATIBLE,
+            ),
             ImageKind::D3 => (vk::ImageType::TYPE_3D, vk::ImageCreateFlags::empty()),
         };
         let info = vk::ImageCreateInfo::default()

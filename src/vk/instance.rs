@@ -63,7 +63,10 @@ impl MessageCounts {
     }
 
     pub fn first_errors(&self) -> Vec<String> {
-        self.first_errors.lock().map(|v| v.clone()).unwrap_or_default()
+        self.first_errors
+            .lock()
+            .map(|v| v.clone())
+            .unwrap_or_default()
     }
 }
 
@@ -97,7 +100,8 @@ unsafe extern "system" fn debug_callback(
     };
     counts.record(severity, &text);
     if severity.intersects(
-        vk::DebugUtilsMessageSeverityFlagsEXT::ERROR | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
+        vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+            | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
     ) {
         eprintln!("[vulkan {severity:?} {types:?}] {text}");
     }

@@ -216,12 +216,14 @@ impl Pipeline {
         let attributes: Vec<_> = desc
             .attributes
             .iter()
-            .map(|&(location, format, offset)| vk::VertexInputAttributeDescription {
-                location,
-                binding: 0,
-                format,
-                offset,
-            })
+            .map(
+                |&(location, format, offset)| vk::VertexInputAttributeDescription {
+                    location,
+                    binding: 0,
+                    format,
+                    offset,
+                },
+            )
             .collect();
         let vertex_input = if desc.vertex_stride > 0 {
             vk::PipelineVertexInputStateCreateInfo::default()
@@ -248,7 +250,8 @@ impl Pipeline {
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
         let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
             .color_write_mask(vk::ColorComponentFlags::RGBA)];
-        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+        let blend =
+            vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let color_formats = [desc.color_format];

@@ -113,8 +113,8 @@ impl GpuProfiler {
                 .query_count(capacity)
                 .pipeline_statistics(STATISTICS);
             // SAFETY: the feature was enabled at device creation.
-            let pool = unsafe { device.raw.create_query_pool(&info, None) }
-                .check("vkCreateQueryPool")?;
+            let pool =
+                unsafe { device.raw.create_query_pool(&info, None) }.check("vkCreateQueryPool")?;
             device.set_name(pool, &format!("{name} statistics"));
             profiler.statistics = Some(pool);
         }

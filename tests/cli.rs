@@ -1,0 +1,133 @@
+//! The command line: the default render end to end, and bad input failing cleanly.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn lamina(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lamina"))
+        .args(args)
+        .current_dir(dir)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .output()
+        .expect("run lamina")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// The bad-input contract: non-zero exit, a message naming the culprit, no output file.
+fn assert_rejected(args: &[&str], dir: &Path, expected: &[&str]) {
+    let mut full = vec!["--validation", "render"];
+    if !args.contains(&"--size") {
+        full.extend_from_slice(&["--size", "64x48"]);
+    }
+    full.extend_from_slice(args);
+    full.extend_from_slice(&["--out", "o.exr", "--png", "o.png"]);
+    let out = lamina(&full, dir);
+    let message = stderr(&out);
+    assert!(!out.status.success(), "{args:?} succeeded");
+    for word in expected {
+        assert!(
+            message.contains(word),
+            "{args:?}: `{word}` missing from: {message}"
+        );
+    }
+    assert!(
+        !message.contains("panicked"),
+        "{args:?} panicked: {message}"
+    );
+    let left: Vec<_> = std::fs::read_dir(dir).unwrap().collect();
+    assert!(left.is_empty(), "{args:?} left files behind: {left:?}");
+}
+
+#[test]
+fn render_writes_exr_and_png_and_prints_gpu_time() {
+    let dir = common::scratch_dir("cli-render");
+    let out = lamina(
+        &[
+            "--validation",
+            "render",
+            "--size",
+            "96x64",
+            "--out",
+            "r/render.exr",
+            "--png",
+            "r/render.png",
+        ],
+        &dir,
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}{}", stdout, stderr(&out));
+    assert!(
+        stdout.contains("shaded draw:") && stdout.contains("ms GPU"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("fragment invocations"), "{stdout}");
+    let exr = lamina::imageio::read_exr(&dir.join("r/render.exr")).unwrap();
+    assert_eq!((exr.width, exr.height), (96, 64));
+    let png = std::fs::read(dir.join("r/render.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    // Only the two outputs: no temporary files left behind.
+    assert_eq!(std::fs::read_dir(dir.join("r")).unwrap().count(), 2);
+}
+
+#[test]
+fn missing_environment_is_named() {
+    let dir = common::scratch_dir("cli-missing-env");
+    assert_rejected(
+        &["--env", "nope/absent.exr"],
+        &dir,
+        &["absent.exr", "no such file"],
+    );
+}
+
+#[test]
+fn corrupt_environment_is_named() {
+    let dir = common::scratch_dir("cli-corrupt-env");
+    let bad = common::scratch_dir("cli-corrupt-env-input").join("broken.exr");
+    let mut bytes = std::fs::read(common::repo_path("assets/env/studio.exr")).unwrap();
+    bytes.truncate(bytes.len() / 3);
+    std::fs::write(&bad, bytes).unwrap();
+    assert_rejected(
+        &["--env", bad.to_str().unwrap()],
+        &dir,
+        &["broken.exr", "OpenEXR"],
+    );
+}
+
+#[test]
+fn unknown_variant_axis_and_value_are_named() {
+    let dir = common::scratch_dir("cli-variant");
+    assert_rejected(&["--variant", "modle=ggx"], &dir, &["modle", "axes are"]);
+    assert_rejected(
+        &["--variant", "model=phong"],
+        &dir,
+        &["phong", "ggx, tm2, tm6"],
+    );
+    assert_rejected(
+        &["--variant", "max_layers=0"],
+        &dir,
+        &["max_layers", "1..=16"],
+    );
+}
+
+#[test]
+fn zero_and_malformed_sizes_are_named() {
+    let dir = common::scratch_dir("cli-size");
+    assert_rejected(&["--size", "0x64"], &dir, &["width", "1..=16384"]);
+    assert_rejected(&["--size", "64x0"], &dir, &["height", "1..=16384"]);
+    assert_rejected(&["--size", "64"], &dir, &["WIDTHxHEIGHT"]);
+}
+
+#[test]
+fn unimplemented_model_is_refused_before_writing() {
+    let dir = common::scratch_dir("cli-model");
+    assert_rejected(
+        &["--variant", "model=tm2"],
+        &dir,
+        &["model=tm2", "not implemented"],
+    );
+}
