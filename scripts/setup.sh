@@ -33,7 +33,11 @@ source "$root/scripts/env.sh"
 if [ -z "${SHADERC_LIB_DIR:-}" ]; then
   echo "== building shaderc from source once into $LAMINA_SHADERC_DIR (about 10 minutes)"
   build_dir="$LAMINA_CACHE/shaderc-build"
-  cargo build --locked -p shaderc-sys --features build-from-source --target-dir "$build_dir"
+  # An empty SHADERC_LIB_DIR makes shaderc-sys find no library and build its own sources,
+  # even where Debian's (unusable) libshaderc is installed.
+  mkdir -p "$build_dir/no-library"
+  SHADERC_LIB_DIR="$build_dir/no-library" \
+    cargo build --locked -p shaderc-sys --target-dir "$build_dir"
   lib="$(find "$build_dir" -path '*/out/lib/libshaderc_combined.a' -print -quit)"
   if [ -z "$lib" ]; then
     echo "error: the shaderc build produced no libshaderc_combined.a under $build_dir" >&2
