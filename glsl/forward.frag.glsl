@@ -1,38 +1,63 @@
 #version 460
-// The shaded pass. MODEL = ggx: one GGX lobe with the split-sum IBL (Karis 2013), F0 from the
-// layer's complex IOR — the yardstick every transfer-matrix variant is divided by.
+// The shaded pass. Every lobe is lit by one pre-filtered environment fetch along its dominant
+// direction, weighted by its energy (split sum per lobe, ALGORITHMS.md §8.2):
+//   L = Σ_k e_k · L̃(dir_k, α_k).
+// MODEL = ggx: one GGX lobe of the top layer, energy F0·A + B (Karis 2013) — the yardstick
+// every transfer-matrix variant is divided by. MODEL = tm2 / tm6: the lobes of the
+// transfer-matrix model (lib/tm2.glsl, lib/tm6.glsl).
 #include "shared/frame.glsl"
 #include "shared/variant.glsl"
-#include "lib/precision.glsl"
-#include "lib/fresnel.glsl"
-#include "lib/ibl.glsl"
+#include "shared/material.glsl"
 
 layout(set = 0, binding = 0, std140) uniform Frame {
     FrameConstants frame;
 };
 layout(set = 0, binding = 1) uniform samplerCube prefiltered;
 layout(set = 0, binding = 2) uniform sampler2D split_sum;
+layout(set = 0, binding = 3, std140) uniform Material {
+    MaterialGpu material;
+};
+
+#include "lib/ibl.glsl"
+#include "lib/tm2.glsl"
 
 layout(location = 0) in vec3 world_position;
 layout(location = 1) in vec3 world_normal;
 layout(location = 0) out vec4 color;
 
-// Radiance reflected by one GGX lobe of directional albedo `f0·A + B`.
-vec3 shade_ggx(vec3 n, vec3 v, float alpha) {
-    float n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
-    vec2 ab = texture(split_sum, vec2(n_dot_v, sqrt(alpha))).rg;
-    real3 f0 = f0_complex(real3(frame.base_ior.rgb), real3(frame.base_kappa.rgb));
-    real3 albedo = f0 * real(ab.x) + real(ab.y);
-    vec3 r = reflect(-v, n);
-    float mip_count = frame.params.y;
+// Pre-filtered radiance of a lobe of roughness α around `r` (the view for back-scatter).
+vec3 lobe_radiance(vec3 n, vec3 r, float alpha) {
     vec3 dir = ibl_dominant_direction(n, r, alpha);
-    vec3 radiance = textureLod(prefiltered, dir, ibl_mip_of_alpha(alpha, mip_count)).rgb;
-    return vec3(real3(radiance) * albedo);
+    return textureLod(prefiltered, dir, ibl_mip_of_alpha(alpha, frame.params.x)).rgb;
+}
+
+vec3 shade_ggx(vec3 n, vec3 v, float n_dot_v) {
+    LayerGpu top = material.layers[0];
+    float alpha = top.params.x;
+    vec2 ab = texture(split_sum, vec2(n_dot_v, sqrt(alpha))).rg;
+    real3 f0 = real3(f0_complex(top.ior.rgb, top.kappa.rgb));
+    real3 albedo = f0 * real(ab.x) + real(ab.y);
+    return vec3(real3(lobe_radiance(n, reflect(-v, n), alpha)) * albedo);
+}
+
+vec3 shade_lobes(vec3 n, vec3 v, float n_dot_v) {
+    Lobe lobes[TM_MAX_LOBES];
+    vec3 reflectance;
+    vec3 transmittance;
+    uint count = tm2_evaluate(material, n_dot_v, lobes, reflectance, transmittance);
+    vec3 mirror = reflect(-v, n);
+    vec3 sum = vec3(0.0);
+    for (uint k = 0u; k < count; ++k) {
+        vec3 around = lobes[k].kind == LOBE_RETRO ? v : mirror;
+        sum += lobes[k].weight * lobe_radiance(n, around, lobes[k].alpha);
+    }
+    return sum;
 }
 
 void main() {
     vec3 n = normalize(world_normal);
     vec3 v = normalize(frame.camera_pos.xyz - world_position);
-    float alpha = frame.params.x;
-    color = vec4(shade_ggx(n, v, alpha), 1.0);
+    float n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
+    vec3 radiance = MODEL == MODEL_GGX ? shade_ggx(n, v, n_dot_v) : shade_lobes(n, v, n_dot_v);
+    color = vec4(radiance, 1.0);
 }

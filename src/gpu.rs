@@ -44,7 +44,19 @@ impl ComputeKernel {
         push_constant_bytes: u32,
         spec: &S,
     ) -> Result<Self> {
-        let spirv = gpu.shaders.compile(entry, &[])?;
+        Self::with_defines(gpu, entry, &[], bindings, push_constant_bytes, spec)
+    }
+
+    /// As [`ComputeKernel::new`], with preprocessor definitions (a variant's `defines()`).
+    pub fn with_defines<S: SpecConstants>(
+        gpu: &Gpu,
+        entry: &str,
+        defines: &[(&str, &str)],
+        bindings: &[BindingKind],
+        push_constant_bytes: u32,
+        spec: &S,
+    ) -> Result<Self> {
+        let spirv = gpu.shaders.compile(entry, defines)?;
         let device = &gpu.device;
         let set_layout = DescriptorSetLayout::new(device, bindings, Stages::Compute, entry)?;
         let layout = PipelineLayout::new(

@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
 use lamina::imageio;
-use lamina::material::Layer;
+use lamina::model::LayerParams;
 use lamina::render::Renderer;
 use lamina::shader::VariantKey;
 use lamina::tables::environment::EnvDesc;
@@ -166,11 +166,19 @@ fn render(cli: &Cli, args: &RenderArgs) -> Result<()> {
     let gpu = open_gpu(cli)?;
     let mut renderer = Renderer::new(&gpu, &equirect, EnvDesc::default())?;
     let pass = renderer.prepare(args.variant)?;
-    let layer = Layer::default();
+    let layers = [LayerParams {
+        ior: [0.143245, 0.377423, 1.43919],
+        kappa: [3.98479, 2.3847, 1.60434],
+        roughness: 0.2,
+        depth: 0.0,
+        sigma_s: [0.0; 3],
+        sigma_a: [0.0; 3],
+        g: 0.0,
+    }];
     for _ in 0..args.warmup {
-        renderer.render(&pass, &layer, args.size.width, args.size.height)?;
+        renderer.render(&pass, &layers, args.size.width, args.size.height)?;
     }
-    let frame = renderer.render(&pass, &layer, args.size.width, args.size.height)?;
+    let frame = renderer.render(&pass, &layers, args.size.width, args.size.height)?;
     if let Some(i) = frame
         .pixels
         .iter()

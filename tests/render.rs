@@ -3,7 +3,6 @@
 mod common;
 
 use glam::{Vec3, Vec4};
-use lamina::material::Layer;
 use lamina::render::Renderer;
 use lamina::shader::VariantKey;
 use lamina::tables::environment::{self, EnvDesc};
@@ -40,7 +39,7 @@ fn default_render_is_finite_sphere_differs_and_sky_matches_environment() {
     let mut renderer = Renderer::new(&gpu, &studio, EnvDesc::default()).unwrap();
     let pass = renderer.prepare(VariantKey::default()).unwrap();
     let (w, h) = (320, 180);
-    let frame = renderer.render(&pass, &Layer::default(), w, h).unwrap();
+    let frame = renderer.render(&pass, &common::gold(), w, h).unwrap();
     assert_eq!(frame.pixels.len(), (w * h) as usize);
     assert!(
         frame.pixels.iter().flatten().all(|c| c.is_finite()),
@@ -107,7 +106,7 @@ fn timestamps_are_ordered_and_full_screen_invocations_match_pixels() {
     // (measured: 24960 invocations at 200×120, 233280 at 640×360), so the 1% bound needs a
     // frame wider than 800 pixels there; 1280×720 is also the size users profile at.
     let (w, h) = (1280, 720);
-    let frame = renderer.render(&pass, &Layer::default(), w, h).unwrap();
+    let frame = renderer.render(&pass, &common::gold(), w, h).unwrap();
     for scope in [&frame.sky, &frame.shaded] {
         println!("{scope:?}");
         assert!(scope.begin_ticks > 0 && scope.end_ticks > 0, "{scope:?}");
@@ -139,7 +138,7 @@ fn fp16_variant_renders_finite_pixels() {
     };
     let mut renderer = Renderer::new(&gpu, &common::studio(), desc).unwrap();
     let pass = renderer.prepare("fp16=on".parse().unwrap()).unwrap();
-    let frame = renderer.render(&pass, &Layer::default(), 96, 64).unwrap();
+    let frame = renderer.render(&pass, &common::gold(), 96, 64).unwrap();
     assert!(frame.pixels.iter().flatten().all(|c| c.is_finite()));
     common::assert_validation_clean(&gpu);
 }

@@ -1,3 +1,85 @@
 //! The CPU reference in f64: pure functions the GPU is tested against.
+//!
+//! The transfer-matrix model of Randrianandrasana, Callet & Lucas 2021 as its reference code
+//! defines it (ALGORITHMS.md §4–5): [`tm2`] (2-flux: rough dielectric interfaces over a
+//! conductor, or a dielectric stack that transmits) and [`tm6`] (6-flux: adds homogeneous
+//! scattering media below each dielectric interface). The directional albedo (FGD) the model
+//! consumes and the TIR correction come from providers ([`Fgd`], [`Tir`]) so the same model
+//! runs with exact quadrature (the oracle) or with the very tables the GPU samples.
+//!
+//! Conventions: the medium above the stack is [`IOR_AIR`]; a dielectric's η is averaged over RGB
+//! (no dispersion), a conductor's (η, κ) is per channel; relative IORs are η_{i+1}/η_i and
+//! κ_{i+1}/η_i; roughness is GGX α.
 
+pub mod fgd;
+pub mod fresnel;
+pub mod hg;
 pub mod microfacet;
+pub mod tm2;
+pub mod tm6;
+
+/// IOR of the medium above the top layer. lamina uses vacuum (1.0), so a single conductor layer
+/// has exactly the F0 the `ggx` baseline uses; the reference's Mitsuba air is 1.000277.
+pub const IOR_AIR: f64 = 1.0;
+
+/// One layer as the model consumes it: the interface at its top (complex IOR of the layer,
+/// GGX α of the interface) and, for the 6-flux model, the homogeneous medium filling it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LayerParams {
+    pub ior: [f64; 3],
+    /// κ > 0 in any channel: a conductor, which ends the stack.
+    pub kappa: [f64; 3],
+    pub roughness: f64,
+    /// Thickness of the medium (6-flux only; 0 = no medium).
+    pub depth: f64,
+    pub sigma_s: [f64; 3],
+    pub sigma_a: [f64; 3],
+    /// Henyey–Greenstein asymmetry of the medium's phase function.
+    pub g: f64,
+}
+
+impl LayerParams {
+    pub fn is_conductor(&self) -> bool {
+        self.kappa.iter().any(|&k| k > 0.0)
+    }
+}
+
+/// One reflected lobe: its RGB energy (directional albedo) and GGX roughness α.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lobe {
+    pub weight: [f64; 3],
+    pub roughness: f64,
+}
+
+/// What the model gives for one view direction.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Evaluation {
+    /// Total reflectance R (the lobe weights sum to it).
+    pub reflectance: [f64; 3],
+    /// Total transmittance T below the stack (0 for a stack ending in a conductor).
+    pub transmittance: [f64; 3],
+    /// TM2: one lobe per layer, top first (lobe k belongs to layer k, zero-energy lobes
+    /// included). TM6: per component, primary then secondary-forward then secondary-backward,
+    /// as the reference emits them.
+    pub lobes: Vec<Lobe>,
+}
+
+/// Directional albedo of a rough interface: FGD(μ, α, η, κ) = ∫ F·D·G2 / (4μ) dω_o.
+pub trait Fgd {
+    fn fgd(&self, mu: f64, alpha: f64, eta: f64, kappa: f64) -> f64;
+}
+
+/// Total-internal-reflection correction: the fraction of a rough lobe (incidence μ, roughness α)
+/// trapped by an interface of relative IOR η < 1 (ALGORITHMS.md §4.5, §6.3).
+pub trait Tir {
+    fn tir(&self, mu: f64, alpha: f64, eta: f64) -> f64;
+}
+
+/// `tir=none`: no correction.
+pub struct NoTir;
+
+impl Tir for NoTir {
+    fn tir(&self, _mu: f64, _alpha: f64, _eta: f64) -> f64 {
+        0.0
+    }
+}

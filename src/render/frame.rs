@@ -9,17 +9,11 @@ pub struct FrameConstants {
     pub inv_view_proj: [[f32; 4]; 4],
     /// xyz: world-space eye.
     pub camera_pos: [f32; 4],
-    /// rgb: η of the single GGX layer, relative to air.
-    pub base_ior: [f32; 4],
-    /// rgb: κ of that layer.
-    pub base_kappa: [f32; 4],
-    /// x: GGX α, y: prefiltered mip count.
+    /// x: mip count of the prefiltered environment.
     pub params: [f32; 4],
 }
 
-const _: () = assert!(size_of::<FrameConstants>() == 192);
+const _: () = assert!(size_of::<FrameConstants>() == 160);
 const _: () = assert!(offset_of!(FrameConstants, inv_view_proj) == 64);
 const _: () = assert!(offset_of!(FrameConstants, camera_pos) == 128);
-const _: () = assert!(offset_of!(FrameConstants, base_ior) == 144);
-const _: () = assert!(offset_of!(FrameConstants, base_kappa) == 160);
-const _: () = assert!(offset_of!(FrameConstants, params) == 176);
+const _: () = assert!(offset_of!(FrameConstants, params) == 144);

@@ -1,7 +1,10 @@
 //! Passes and the frame that runs them: the sky, the shaded sphere, readback.
 
+pub mod eval;
 pub mod forward;
 pub mod frame;
+pub mod furnace;
+pub mod material;
 pub mod renderer;
 pub mod scene;
 pub mod sky;

@@ -7,10 +7,11 @@ use std::collections::HashMap;
 
 use half::f16;
 
+use crate::error::Error;
 use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
-use crate::material::Layer;
+use crate::model::LayerParams;
 use crate::shader::{VariantKey, G2};
 use crate::tables::environment::{EnvDesc, Environment};
 use crate::tables::split_sum::{self, SplitSumTable};
@@ -22,6 +23,7 @@ use crate::vk::{
 
 use super::forward::ForwardPass;
 use super::frame::FrameConstants;
+use super::material::MaterialGpu;
 use super::scene::{uv_sphere, Camera};
 use super::sky::SkyPass;
 
@@ -62,6 +64,7 @@ impl<'g> Renderer<'g> {
                 BindingKind::UniformBuffer,
                 BindingKind::SampledImage,
                 BindingKind::SampledImage,
+                BindingKind::UniformBuffer,
             ],
             Stages::Graphics,
             "scene",
@@ -111,30 +114,30 @@ impl<'g> Renderer<'g> {
         ForwardPass::new(self.gpu, &self.layout, COLOR_FORMAT, variant)
     }
 
-    /// Renders one frame of `layer` with a prepared pass.
+    /// Renders one frame of the stack `layers` (top first) with a prepared pass.
     pub fn render(
         &self,
         pass: &ForwardPass,
-        layer: &Layer,
+        layers: &[LayerParams],
         width: u32,
         height: u32,
     ) -> Result<RenderedFrame> {
+        let max_layers = pass.variant.max_layers as usize;
+        if layers.is_empty() || layers.len() > max_layers {
+            return Err(Error::Unsupported(format!(
+                "the stack has {} layer(s); variant {} holds 1..={max_layers}",
+                layers.len(),
+                pass.variant
+            )));
+        }
         let device = &self.gpu.device;
         let table = &self.split_sums[&pass.variant.g2];
         let view_proj = self.camera.view_proj(width as f32 / height as f32);
-        let pad = |v: [f32; 3]| [v[0], v[1], v[2], 0.0];
         let constants = FrameConstants {
             view_proj: view_proj.to_cols_array_2d(),
             inv_view_proj: view_proj.inverse().to_cols_array_2d(),
             camera_pos: self.camera.eye.extend(1.0).to_array(),
-            base_ior: pad(layer.ior),
-            base_kappa: pad(layer.kappa),
-            params: [
-                layer.roughness,
-                self.environment.desc.mip_count as f32,
-                0.0,
-                0.0,
-            ],
+            params: [self.environment.desc.mip_count as f32, 0.0, 0.0, 0.0],
         };
         let uniforms = Buffer::with_data(
             device,
@@ -142,10 +145,17 @@ impl<'g> Renderer<'g> {
             &[constants],
             "frame constants",
         )?;
+        let material = Buffer::with_data(
+            device,
+            BufferUsageFlags::UNIFORM_BUFFER,
+            &[MaterialGpu::new(layers)],
+            "material",
+        )?;
         let mut set = DescriptorSet::new(device, &self.set_layout, "scene")?;
         set.write(0, Resource::Buffer(&uniforms))
             .write(1, Resource::Sampled(&self.environment.view, &self.sampler))
-            .write(2, Resource::Sampled(&table.view, &self.sampler));
+            .write(2, Resource::Sampled(&table.view, &self.sampler))
+            .write(3, Resource::Buffer(&material));
 
         let target = Image::new(
             device,

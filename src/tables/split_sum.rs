@@ -111,6 +111,42 @@ impl SplitSumTable {
     }
 }
 
+/// The CPU twin of the GPU lookup `texture(split_sum, vec2(μ, √α))`: bilinear over the same
+/// half-float texels, texel centres at (i + ½)/n, clamped at the edges.
+impl SplitSumTable {
+    pub fn sample(&self, mu: f64, alpha: f64) -> [f64; 2] {
+        let n = self.size as usize;
+        let texel = |i: usize, j: usize| {
+            let t = self.texels[j * n + i];
+            [
+                f64::from(f16::from_f32(t[0]).to_f32()),
+                f64::from(f16::from_f32(t[1]).to_f32()),
+            ]
+        };
+        let axis = |u: f64| {
+            let x = (u * n as f64 - 0.5).clamp(0.0, (n - 1) as f64);
+            let i0 = (x.floor() as usize).min(n - 2);
+            (i0, x - i0 as f64)
+        };
+        let (i, fx) = axis(mu.clamp(0.0, 1.0));
+        let (j, fy) = axis(alpha.clamp(0.0, 1.0).sqrt());
+        let lerp =
+            |a: [f64; 2], b: [f64; 2], t: f64| [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t];
+        let bottom = lerp(texel(i, j), texel(i + 1, j), fx);
+        let top = lerp(texel(i, j + 1), texel(i + 1, j + 1), fx);
+        lerp(bottom, top, fy)
+    }
+}
+
+/// `fgd=karis` as the GPU computes it: F0(η, κ)·A + B from the table.
+impl crate::model::Fgd for SplitSumTable {
+    fn fgd(&self, mu: f64, alpha: f64, eta: f64, kappa: f64) -> f64 {
+        let [a, b] = self.sample(mu, alpha);
+        let f0 = ((eta - 1.0).powi(2) + kappa * kappa) / ((eta + 1.0).powi(2) + kappa * kappa);
+        f0 * a + b
+    }
+}
+
 /// (A, B) at view cosine `mu` and GGX `alpha` by an `n`×`n` stratified midpoint rule over the
 /// visible-normal distribution, in f64: the oracle for the GPU table.
 pub fn cpu_reference(mu: f64, alpha: f64, g2: G2, n: u32) -> [f64; 2] {

@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 use lamina::imageio::{self, HdrImage};
+use lamina::model::LayerParams;
 use lamina::Gpu;
 
 /// A device with the Khronos validation layer on.
@@ -37,4 +38,17 @@ pub fn scratch_dir(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("create scratch dir");
     dir
+}
+
+/// A single rough gold layer (ALGORITHMS.md §12.2 n, k): the baseline's default material.
+pub fn gold() -> Vec<LayerParams> {
+    vec![LayerParams {
+        ior: [0.143245, 0.377423, 1.43919],
+        kappa: [3.98479, 2.3847, 1.60434],
+        roughness: 0.2,
+        depth: 0.0,
+        sigma_s: [0.0; 3],
+        sigma_a: [0.0; 3],
+        g: 0.0,
+    }]
 }

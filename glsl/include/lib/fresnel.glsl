@@ -6,11 +6,9 @@
 
 // Normal-incidence reflectance of an interface with relative complex IOR η + iκ:
 // F0 = ((η − 1)² + κ²) / ((η + 1)² + κ²). Exact for conductors and dielectrics alike.
-real3 f0_complex(real3 eta, real3 kappa) {
-    real3 k2 = kappa * kappa;
-    real3 num = (eta - real(1.0)) * (eta - real(1.0)) + k2;
-    real3 den = (eta + real(1.0)) * (eta + real(1.0)) + k2;
-    return num / den;
+vec3 f0_complex(vec3 eta, vec3 kappa) {
+    vec3 k2 = kappa * kappa;
+    return ((eta - 1.0) * (eta - 1.0) + k2) / ((eta + 1.0) * (eta + 1.0) + k2);
 }
 
 // Schlick's weight (1 − cos)^5, the basis of the split-sum table.

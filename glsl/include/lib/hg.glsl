@@ -1,0 +1,32 @@
+// Henyey–Greenstein lobe algebra of the transfer-matrix model (Randrianandrasana, Callet &
+// Lucas 2021; ALGORITHMS.md §3). A lobe's spread is its HG asymmetry g; paths compose by
+// multiplying g's. Mirrors src/model/hg.rs.
+#ifndef LAMINA_LIB_HG
+#define LAMINA_LIB_HG
+
+#include "precision.glsl"
+
+// GGX α → HG g (the paper's Eq. 15), exact inverse of hg_alpha_of_g on α ∈ [0, 1].
+float hg_g_of_alpha(float alpha) {
+    float a = clamp(alpha, 0.0, 1.0);
+    return clamp(-0.085 + 1.085 / (1.0 + pow(a / 0.5, 1.3)), 0.0, 1.0);
+}
+
+// HG g → GGX α; any g below 0.2284 maps to α = 1.
+float hg_alpha_of_g(float g) {
+    float x = 1.085 / (max(clamp(g, -1.0, 1.0), 0.2) + 0.085) - 1.0;
+    return clamp(0.5 * pow(x, 1.0 / 1.3), 1e-4, 1.0);
+}
+
+// Lobe refraction through relative IOR η (the paper's Eq. 17–18).
+float hg_refract(float g, float eta) {
+    return min(sqrt(max(1.0 - (1.0 - g * g) * pow(eta, 0.75), 0.0)), 1.0);
+}
+
+// Fraction of an HG phase function in the backward hemisphere (polynomial fit, §3.5).
+float hg_lh_norm(float g) {
+    float b = clamp(0.5039 - 0.8254 * abs(g) + 0.3226 * g * g, 0.0, 0.5);
+    return g < 0.0 ? 1.0 - b : b;
+}
+
+#endif

@@ -1,0 +1,76 @@
+// Pieces shared by the 2-flux and 6-flux models: lobes, 2×2 energy matrices per RGB channel,
+// and the Snell chain of the mean direction (ALGORITHMS.md §2, §4.2).
+#ifndef LAMINA_LIB_TM_COMMON
+#define LAMINA_LIB_TM_COMMON
+
+#include "precision.glsl"
+#include "hg.glsl"
+#include "fgd.glsl"
+#include "tir.glsl"
+#include "../shared/variant.glsl"
+#include "../shared/material.glsl"
+
+// The medium above the stack: vacuum, as src/model/mod.rs's IOR_AIR.
+const float IOR_AIR = 1.0;
+
+// Lobes reflect around the mirror direction of the view, or (6-flux back-scatter) around the
+// view itself.
+#define LOBE_MIRROR 0u
+#define LOBE_RETRO 1u
+
+// Largest lobe count of a variant: one per layer (2-flux), three per component (6-flux:
+// interface, medium, …, substrate).
+const uint TM_MAX_LOBES = MODEL == MODEL_TM6 ? 3u * (2u * MAX_LAYERS - 1u) : MAX_LAYERS;
+
+struct Lobe {
+    vec3 weight;   // RGB energy (directional albedo)
+    float alpha;   // GGX roughness
+    uint kind;     // LOBE_MIRROR or LOBE_RETRO
+};
+
+// A 2×2 transfer matrix per RGB channel, mapping the fluxes below a component to those above.
+struct TmMatrix {
+    real3 m11, m12, m21, m22;
+};
+
+TmMatrix tm_identity() {
+    return TmMatrix(real3(1.0), real3(0.0), real3(0.0), real3(1.0));
+}
+
+TmMatrix tm_mul(TmMatrix a, TmMatrix b) {
+    return TmMatrix(a.m11 * b.m11 + a.m12 * b.m21, a.m11 * b.m12 + a.m12 * b.m22,
+                    a.m21 * b.m11 + a.m22 * b.m21, a.m21 * b.m12 + a.m22 * b.m22);
+}
+
+// Interface matrix from its scattering relations a↑ = r a↓ + t' b↑, b↓ = t a↓ + r' b↑ (§4.2):
+// M = (1/t) [1, −r'; r, t t' − r r'].
+TmMatrix tm_interface(real3 r, real3 t, real3 rp, real3 tp) {
+    real3 inv_t = real3(1.0) / t;
+    return TmMatrix(inv_t, -rp * inv_t, r * inv_t, (t * tp - r * rp) * inv_t);
+}
+
+// Reflectance of a composed stack over a substrate of reflectance r_c (the paper's Eq. 24).
+real3 tm_terminate(TmMatrix m, real3 r_c) {
+    return (m.m21 + m.m22 * r_c) / (m.m11 + m.m12 * r_c);
+}
+
+real tm_avg(real3 v) {
+    return (v.x + v.y + v.z) * real(1.0 / 3.0);
+}
+
+float tm_mean(vec3 v) {
+    return (v.x + v.y + v.z) / 3.0;
+}
+
+bool tm_is_conductor(LayerGpu layer) {
+    return any(greaterThan(layer.kappa.rgb, vec3(0.0)));
+}
+
+// |cos| of the mean direction refracted from cosine `cos_i` through relative IOR η; 0 when the
+// mean direction itself is totally reflected.
+float tm_refracted_cos(float cos_i, float eta) {
+    float c2 = 1.0 - (1.0 - cos_i * cos_i) / (eta * eta);
+    return c2 > 0.0 ? sqrt(c2) : 0.0;
+}
+
+#endif

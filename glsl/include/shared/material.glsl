@@ -1,0 +1,20 @@
+// The layer stack as the shaders read it. Mirrors `MaterialGpu` in src/render/material.rs
+// (std140; the Rust side asserts size and offsets). The array has the host's fixed maximum;
+// the shading loops run over `info.x` layers into function-local arrays sized by MAX_LAYERS.
+#ifndef LAMINA_SHARED_MATERIAL
+#define LAMINA_SHARED_MATERIAL
+
+struct LayerGpu {
+    vec4 ior;      // rgb: η of the layer (absolute)
+    vec4 kappa;    // rgb: κ of the layer; > 0 in any channel: conductor (last layer)
+    vec4 sigma_s;  // rgb: scattering coefficient of the medium (6-flux)
+    vec4 sigma_a;  // rgb: absorption coefficient of the medium (6-flux)
+    vec4 params;   // x: GGX α of the top interface, y: medium depth, z: HG g, w: unused
+};
+
+struct MaterialGpu {
+    uvec4 info;    // x: layer count
+    LayerGpu layers[LAMINA_MAX_LAYERS_LIMIT];
+};
+
+#endif

@@ -1,0 +1,43 @@
+#version 460
+// Evaluates the model at given view cosines for one stack: the GPU side of `lamina eval
+// --backend gpu` and of the GPU-vs-CPU tests. Same library code as the forward pass.
+// Output per sample, `stride` vec4s: (R, lobe count), (T, 0), then (weight, α) per lobe.
+#include "shared/variant.glsl"
+#include "shared/material.glsl"
+
+layout(local_size_x = 64) in;
+
+layout(set = 0, binding = 0, std140) uniform Material {
+    MaterialGpu material;
+};
+layout(set = 0, binding = 1) uniform sampler2D split_sum;
+layout(set = 0, binding = 2, std430) readonly buffer Samples {
+    float cos_theta[];
+} samples;
+layout(set = 0, binding = 3, std430) writeonly buffer Results {
+    vec4 values[];
+} results;
+
+layout(push_constant) uniform Push {
+    uint sample_count;
+    uint stride;
+} push;
+
+#include "lib/tm2.glsl"
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= push.sample_count) {
+        return;
+    }
+    Lobe lobes[TM_MAX_LOBES];
+    vec3 reflectance;
+    vec3 transmittance;
+    uint count = tm2_evaluate(material, samples.cos_theta[i], lobes, reflectance, transmittance);
+    uint base = i * push.stride;
+    results.values[base] = vec4(reflectance, float(count));
+    results.values[base + 1u] = vec4(transmittance, 0.0);
+    for (uint k = 0u; k < count; ++k) {
+        results.values[base + 2u + k] = vec4(lobes[k].weight, lobes[k].alpha);
+    }
+}

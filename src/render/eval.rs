@@ -1,0 +1,161 @@
+//! The model evaluated on the GPU at given view cosines, with the same shader library as the
+//! forward pass (`tm_eval.comp.glsl`): `lamina eval --backend gpu`, and the GPU side of the
+//! GPU-vs-CPU tests.
+
+use crate::error::{Error, Result};
+use crate::gpu::{ComputeKernel, Gpu};
+use crate::model::{Evaluation, LayerParams, Lobe};
+use crate::shader::{Model, VariantKey};
+use crate::tables::split_sum::{self, SplitSumTable};
+use crate::vk::{
+    submit_and_wait, Access, BindingKind, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
+    Resource, Sampler, SamplerDesc,
+};
+
+use super::forward::check_available;
+use super::material::MaterialGpu;
+
+const LOCAL_SIZE: u32 = 64;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Push {
+    sample_count: u32,
+    stride: u32,
+}
+
+pub struct GpuEvaluator<'g> {
+    gpu: &'g Gpu,
+    pub variant: VariantKey,
+    kernel: ComputeKernel,
+    /// The FGD table the shader samples (`fgd=karis`); CPU runs that must match the GPU use it
+    /// as their provider.
+    pub table: SplitSumTable,
+    sampler: Sampler,
+}
+
+impl<'g> GpuEvaluator<'g> {
+    pub fn new(gpu: &'g Gpu, variant: VariantKey) -> Result<Self> {
+        if variant.model == Model::Ggx {
+            return Err(Error::Unsupported(
+                "eval evaluates the transfer-matrix models; use model=tm2 or model=tm6".into(),
+            ));
+        }
+        check_available(&variant)?;
+        if variant.fp16 && !gpu.device.supports_fp16() {
+            return Err(Error::Unsupported(format!(
+                "fp16=on needs the shaderFloat16 feature, which `{}` lacks",
+                gpu.device.report.name
+            )));
+        }
+        let kernel = ComputeKernel::with_defines(
+            gpu,
+            "tm_eval.comp.glsl",
+            &variant.defines(),
+            &[
+                BindingKind::UniformBuffer,
+                BindingKind::SampledImage,
+                BindingKind::StorageBuffer,
+                BindingKind::StorageBuffer,
+            ],
+            std::mem::size_of::<Push>() as u32,
+            &variant.spec(),
+        )?;
+        let table = SplitSumTable::build(
+            gpu,
+            variant.g2,
+            split_sum::DEFAULT_SIZE,
+            split_sum::DEFAULT_SAMPLES,
+        )?;
+        let sampler = Sampler::new(&gpu.device, SamplerDesc::linear_clamp(), "eval tables")?;
+        Ok(Self {
+            gpu,
+            variant,
+            kernel,
+            table,
+            sampler,
+        })
+    }
+
+    /// Most lobes one evaluation can emit for this variant (the shader's `TM_MAX_LOBES`).
+    pub fn max_lobes(&self) -> usize {
+        let n = self.variant.max_layers as usize;
+        match self.variant.model {
+            Model::Tm6 => 3 * (2 * n - 1),
+            _ => n,
+        }
+    }
+
+    /// Evaluates `layers` (top first) at each view cosine.
+    pub fn evaluate(&self, layers: &[LayerParams], cosines: &[f64]) -> Result<Vec<Evaluation>> {
+        let max_layers = self.variant.max_layers as usize;
+        if layers.is_empty() || layers.len() > max_layers {
+            return Err(Error::Unsupported(format!(
+                "the stack has {} layer(s); variant {} holds 1..={max_layers}",
+                layers.len(),
+                self.variant
+            )));
+        }
+        if cosines.is_empty() {
+            return Ok(Vec::new());
+        }
+        let device = &self.gpu.device;
+        let stride = 2 + self.max_lobes();
+        let material = Buffer::with_data(
+            device,
+            BufferUsageFlags::UNIFORM_BUFFER,
+            &[MaterialGpu::new(layers)],
+            "eval material",
+        )?;
+        let samples: Vec<f32> = cosines.iter().map(|&c| c as f32).collect();
+        let samples = Buffer::with_data(
+            device,
+            BufferUsageFlags::STORAGE_BUFFER,
+            &samples,
+            "eval samples",
+        )?;
+        let results = Buffer::new(
+            device,
+            BufferDesc::readback((cosines.len() * stride * 16) as u64),
+            "eval results",
+        )?;
+        let mut set = DescriptorSet::new(device, &self.kernel.set_layout, "eval")?;
+        set.write(0, Resource::Buffer(&material))
+            .write(1, Resource::Sampled(&self.table.view, &self.sampler))
+            .write(2, Resource::Buffer(&samples))
+            .write(3, Resource::Buffer(&results));
+        let count = cosines.len() as u32;
+        submit_and_wait(device, "eval", |rec| {
+            rec.bind_pipeline(&self.kernel.pipeline);
+            rec.bind_set(&self.kernel.pipeline, &self.kernel.layout, 0, &set);
+            rec.push_constants(
+                &self.kernel.layout,
+                &Push {
+                    sample_count: count,
+                    stride: stride as u32,
+                },
+            );
+            rec.dispatch(count.div_ceil(LOCAL_SIZE), 1, 1);
+            rec.barrier(Access::ComputeWrite, Access::HostRead);
+            Ok(())
+        })?;
+        let values: Vec<[f32; 4]> = results.read();
+        Ok(values.chunks(stride).map(unpack).collect())
+    }
+}
+
+fn unpack(chunk: &[[f32; 4]]) -> Evaluation {
+    let rgb = |v: [f32; 4]| [f64::from(v[0]), f64::from(v[1]), f64::from(v[2])];
+    let lobe_count = chunk[0][3] as usize;
+    Evaluation {
+        reflectance: rgb(chunk[0]),
+        transmittance: rgb(chunk[1]),
+        lobes: chunk[2..2 + lobe_count]
+            .iter()
+            .map(|&v| Lobe {
+                weight: rgb(v),
+                roughness: f64::from(v[3]),
+            })
+            .collect(),
+    }
+}

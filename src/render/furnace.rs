@@ -1,0 +1,124 @@
+//! The white furnace: a material under a uniform white environment reflects exactly its
+//! directional albedo, so the image measures the energy the shading path returns per view angle.
+//!
+//! The GPU side renders the sphere under a constant environment of radiance 1 and averages the
+//! pixels by the cosine between normal and view (computed on the CPU from the camera and the
+//! sphere); the CPU side evaluates the model's total reflectance at the bins' centres.
+
+use glam::{Vec3, Vec4};
+use half::f16;
+
+use crate::error::Result;
+use crate::gpu::Gpu;
+use crate::imageio::HdrImage;
+use crate::model::LayerParams;
+use crate::shader::VariantKey;
+use crate::tables::environment::EnvDesc;
+
+use super::renderer::Renderer;
+
+/// Reflected energy averaged over the view cosines of one bin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FurnaceBin {
+    /// Mean view cosine of the bin's samples.
+    pub cos_theta: f64,
+    pub energy: [f64; 3],
+    /// Pixels (GPU) or evaluations (CPU) that went into the bin.
+    pub samples: usize,
+}
+
+/// Minimum, mean and maximum over all bins and channels.
+pub fn summary(bins: &[FurnaceBin]) -> (f64, f64, f64) {
+    let values: Vec<f64> = bins.iter().flat_map(|b| b.energy).collect();
+    let min = values.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mean = values.iter().sum::<f64>() / values.len().max(1) as f64;
+    (min, mean, max)
+}
+
+/// Renders `layers` under a white environment at `size`² pixels and bins the sphere's
+/// radiance by n·v into `bin_count` bins (empty bins are dropped).
+pub fn gpu(
+    gpu: &Gpu,
+    variant: VariantKey,
+    layers: &[LayerParams],
+    size: u32,
+    bin_count: usize,
+) -> Result<Vec<FurnaceBin>> {
+    let white = HdrImage {
+        width: 64,
+        height: 32,
+        pixels: vec![[1.0; 4]; 64 * 32],
+    };
+    let desc = EnvDesc {
+        face_size: 32,
+        mip_count: 6,
+        samples: 16,
+    };
+    let mut renderer = Renderer::new(gpu, &white, desc)?;
+    let pass = renderer.prepare(variant)?;
+    let frame = renderer.render(&pass, layers, size, size)?;
+
+    let camera = renderer.camera;
+    let inverse = camera.view_proj(1.0).inverse();
+    // Per bin: radiance sums, cosine sum, pixel count.
+    let mut sums = vec![([0.0f64; 3], 0.0f64, 0usize); bin_count];
+    for y in 0..size {
+        for x in 0..size {
+            let ndc = Vec4::new(
+                2.0 * (x as f32 + 0.5) / size as f32 - 1.0,
+                2.0 * (y as f32 + 0.5) / size as f32 - 1.0,
+                1.0,
+                1.0,
+            );
+            let far = inverse * ndc;
+            let dir = (far.truncate() / far.w - camera.eye).normalize();
+            let Some(cos_theta) = sphere_cosine(camera.eye, dir) else {
+                continue;
+            };
+            let bin = ((cos_theta * bin_count as f64) as usize).min(bin_count - 1);
+            let p = frame.pixels[(y * size + x) as usize];
+            for (sum, c) in sums[bin].0.iter_mut().zip(p) {
+                *sum += f64::from(f16::to_f32(c));
+            }
+            sums[bin].1 += cos_theta;
+            sums[bin].2 += 1;
+        }
+    }
+    Ok(sums
+        .iter()
+        .filter(|(_, _, n)| *n > 0)
+        .map(|(sum, cos_sum, n)| FurnaceBin {
+            cos_theta: cos_sum / *n as f64,
+            energy: sum.map(|s| s / *n as f64),
+            samples: *n,
+        })
+        .collect())
+}
+
+/// n·v where the ray hits the unit sphere at the origin, for rays that stay clear of the
+/// silhouette (whose pixels mix sphere and background).
+fn sphere_cosine(eye: Vec3, dir: Vec3) -> Option<f64> {
+    let (eye, dir) = (eye.as_dvec3(), dir.as_dvec3());
+    let b = eye.dot(dir);
+    let closest = eye - b * dir;
+    if closest.length() > 0.98 {
+        return None;
+    }
+    let t = -b - (1.0 - closest.length_squared()).sqrt();
+    let normal = (eye + t * dir).normalize();
+    Some(normal.dot(-dir).clamp(0.0, 1.0))
+}
+
+/// The CPU model's total reflectance at each view cosine, through `evaluate`
+/// (cos θ → reflectance).
+pub fn cpu(cosines: &[f64], evaluate: impl Fn(f64) -> [f64; 3]) -> Vec<FurnaceBin> {
+    cosines
+        .iter()
+        .map(|&cos_theta| FurnaceBin {
+            cos_theta,
+            energy: evaluate(cos_theta),
+            samples: 1,
+        })
+        .collect()
+}
