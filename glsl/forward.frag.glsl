@@ -20,6 +20,7 @@ layout(set = 0, binding = 3, std140) uniform Material {
 
 #include "lib/ibl.glsl"
 #include "lib/tm2.glsl"
+#include "lib/tm6.glsl"
 
 layout(location = 0) in vec3 world_position;
 layout(location = 1) in vec3 world_normal;
@@ -44,7 +45,9 @@ vec3 shade_lobes(vec3 n, vec3 v, float n_dot_v) {
     Lobe lobes[TM_MAX_LOBES];
     vec3 reflectance;
     vec3 transmittance;
-    uint count = tm2_evaluate(material, n_dot_v, lobes, reflectance, transmittance);
+    uint count = MODEL == MODEL_TM6
+        ? tm6_evaluate(material, n_dot_v, lobes, reflectance, transmittance)
+        : tm2_evaluate(material, n_dot_v, lobes, reflectance, transmittance);
     vec3 mirror = reflect(-v, n);
     vec3 sum = vec3(0.0);
     for (uint k = 0u; k < count; ++k) {

@@ -24,6 +24,7 @@ layout(push_constant) uniform Push {
 } push;
 
 #include "lib/tm2.glsl"
+#include "lib/tm6.glsl"
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
@@ -33,7 +34,10 @@ void main() {
     Lobe lobes[TM_MAX_LOBES];
     vec3 reflectance;
     vec3 transmittance;
-    uint count = tm2_evaluate(material, samples.cos_theta[i], lobes, reflectance, transmittance);
+    float mu = samples.cos_theta[i];
+    uint count = MODEL == MODEL_TM6
+        ? tm6_evaluate(material, mu, lobes, reflectance, transmittance)
+        : tm2_evaluate(material, mu, lobes, reflectance, transmittance);
     uint base = i * push.stride;
     results.values[base] = vec4(reflectance, float(count));
     results.values[base + 1u] = vec4(transmittance, 0.0);

@@ -7,7 +7,8 @@
 //! - [`render`] — passes (sky, shaded sphere), the scene and readback;
 //! - [`model`] — the CPU reference in f64;
 //! - [`material`] — layers;
-//! - [`imageio`] — EXR/PNG input and atomic output.
+//! - [`imageio`] — EXR/PNG input and atomic output;
+//! - [`output`] — the JSON and tables commands print.
 #![warn(unsafe_op_in_unsafe_fn)]
 
 pub mod error;
@@ -15,6 +16,7 @@ pub mod gpu;
 pub mod imageio;
 pub mod material;
 pub mod model;
+pub mod output;
 pub mod render;
 pub mod shader;
 pub mod tables;

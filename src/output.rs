@@ -1,0 +1,74 @@
+//! Machine-readable output of `lamina eval` (DESIGN.md §5). Other tools parse it: keep the
+//! field names and nesting stable.
+
+use serde::Serialize;
+
+use crate::model::Evaluation;
+
+#[derive(Debug, Serialize)]
+pub struct EvalReport {
+    pub material: String,
+    pub model: String,
+    pub backend: String,
+    pub samples: Vec<EvalSample>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct EvalSample {
+    pub cos_theta: f64,
+    pub reflectance: [f64; 3],
+    pub transmittance: [f64; 3],
+    pub lobes: Vec<EvalLobe>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct EvalLobe {
+    pub weight: [f64; 3],
+    /// GGX α of the lobe.
+    pub roughness: f64,
+}
+
+impl EvalSample {
+    pub fn new(cos_theta: f64, evaluation: &Evaluation) -> Self {
+        Self {
+            cos_theta,
+            reflectance: evaluation.reflectance,
+            transmittance: evaluation.transmittance,
+            lobes: evaluation
+                .lobes
+                .iter()
+                .map(|l| EvalLobe {
+                    weight: l.weight,
+                    roughness: l.roughness,
+                })
+                .collect(),
+        }
+    }
+}
+
+impl EvalReport {
+    /// A human-readable table: one block per sample, one line per lobe.
+    pub fn table(&self) -> String {
+        let mut out = format!(
+            "material: {}   model: {}   backend: {}\n",
+            self.material, self.model, self.backend
+        );
+        let rgb = |v: [f64; 3]| format!("{:.5} {:.5} {:.5}", v[0], v[1], v[2]);
+        for s in &self.samples {
+            out += &format!(
+                "cos θ = {:.4}   R = {}   T = {}\n",
+                s.cos_theta,
+                rgb(s.reflectance),
+                rgb(s.transmittance)
+            );
+            for (k, l) in s.lobes.iter().enumerate() {
+                out += &format!(
+                    "    lobe {k:>2}: weight {}   α {:.4}\n",
+                    rgb(l.weight),
+                    l.roughness
+                );
+            }
+        }
+        out
+    }
+}
