@@ -7,6 +7,7 @@ pub mod furnace;
 pub mod material;
 pub mod renderer;
 pub mod scene;
+pub mod sheet;
 pub mod sky;
 
 pub use renderer::{RenderedFrame, Renderer, COLOR_FORMAT};

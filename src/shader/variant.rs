@@ -241,7 +241,14 @@ impl FromStr for VariantKey {
     type Err = VariantError;
 
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let mut key = Self::default();
+        Self::parse_over(s, Self::default())
+    }
+}
+
+impl VariantKey {
+    /// Parses `s`, taking the axes it does not name from `base` (e.g. the material's model).
+    pub fn parse_over(s: &str, base: Self) -> Result<Self, VariantError> {
+        let mut key = base;
         let mut seen: Vec<&str> = Vec::new();
         for pair in s.split(',').map(str::trim).filter(|p| !p.is_empty()) {
             let (axis, value) = pair
@@ -337,6 +344,19 @@ mod tests {
         for key in keys {
             assert_eq!(key.to_string().parse::<VariantKey>().unwrap(), key);
         }
+    }
+
+    #[test]
+    fn unnamed_axes_come_from_the_base() {
+        let base = VariantKey {
+            model: Model::Tm6,
+            max_layers: 7,
+            ..VariantKey::default()
+        };
+        let k = VariantKey::parse_over("fp16=on", base).unwrap();
+        assert_eq!((k.model, k.max_layers, k.fp16), (Model::Tm6, 7, true));
+        let k = VariantKey::parse_over("model=ggx", base).unwrap();
+        assert_eq!(k.model, Model::Ggx);
     }
 
     #[test]

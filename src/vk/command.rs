@@ -532,6 +532,7 @@ impl Fence {
                 .create_fence(&vk::FenceCreateInfo::default(), None)
         }
         .check("vkCreateFence")?;
+        device.set_name(raw, "submit fence");
         Ok(Self {
             device: device.clone(),
             raw,

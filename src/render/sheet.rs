@@ -1,0 +1,59 @@
+//! A contact sheet: every material in every variant, tone-mapped and tiled (rows = materials,
+//! columns = variants), for documentation and for eyeballing a change.
+
+use crate::error::{Error, Result};
+use crate::gpu::Gpu;
+use crate::imageio::{tonemap, HdrImage};
+use crate::model::LayerParams;
+use crate::shader::VariantKey;
+use crate::tables::environment::EnvDesc;
+
+use super::renderer::Renderer;
+
+/// One row of the sheet.
+pub struct SheetRow {
+    pub name: String,
+    pub layers: Vec<LayerParams>,
+}
+
+/// Gap between tiles, in pixels.
+const GAP: usize = 4;
+
+/// Renders each row in each variant at `tile`² pixels and returns the sheet as 8-bit RGBA
+/// (width, height, pixels). Fails on the first non-finite pixel, naming row and variant.
+pub fn render(
+    gpu: &Gpu,
+    equirect: &HdrImage,
+    rows: &[SheetRow],
+    variants: &[VariantKey],
+    tile: u32,
+    exposure_ev: f32,
+) -> Result<(usize, usize, Vec<u8>)> {
+    let mut renderer = Renderer::new(gpu, equirect, EnvDesc::default())?;
+    let passes = variants
+        .iter()
+        .map(|&v| renderer.prepare(v))
+        .collect::<Result<Vec<_>>>()?;
+    let t = tile as usize;
+    let width = variants.len() * (t + GAP) + GAP;
+    let height = rows.len() * (t + GAP) + GAP;
+    let mut sheet: Vec<u8> = [40, 40, 40, 255].repeat(width * height);
+    for (r, row) in rows.iter().enumerate() {
+        for (c, pass) in passes.iter().enumerate() {
+            let frame = renderer.render(pass, &row.layers, tile, tile)?;
+            if frame.pixels.iter().flatten().any(|v| !v.is_finite()) {
+                return Err(Error::Unsupported(format!(
+                    "`{}` in {} rendered a non-finite pixel",
+                    row.name, pass.variant
+                )));
+            }
+            let rgba = tonemap(&frame.pixels, exposure_ev);
+            let (x0, y0) = (GAP + c * (t + GAP), GAP + r * (t + GAP));
+            for y in 0..t {
+                let dst = ((y0 + y) * width + x0) * 4;
+                sheet[dst..dst + t * 4].copy_from_slice(&rgba[y * t * 4..(y + 1) * t * 4]);
+            }
+        }
+    }
+    Ok((width, height, sheet))
+}
