@@ -123,11 +123,7 @@ fn zero_and_malformed_sizes_are_named() {
 }
 
 #[test]
-fn unimplemented_model_is_refused_before_writing() {
-    let dir = common::scratch_dir("cli-model");
-    assert_rejected(
-        &["--variant", "model=tm2"],
-        &dir,
-        &["model=tm2", "not implemented"],
-    );
+fn unimplemented_axis_value_is_refused_before_writing() {
+    let dir = common::scratch_dir("cli-tir");
+    assert_rejected(&["--variant", "tir=lut32"], &dir, &["tir", "not implemented"]);
 }
