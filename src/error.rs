@@ -13,6 +13,8 @@ pub enum Error {
     Shader(#[from] ShaderError),
     #[error(transparent)]
     Variant(#[from] VariantError),
+    #[error(transparent)]
+    Material(#[from] crate::material::MaterialError),
     #[error("{path}: {message}")]
     Input { path: PathBuf, message: String },
     #[error("writing {path}: {message}")]

@@ -8,8 +8,10 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
 use lamina::imageio;
-use lamina::model::LayerParams;
+use lamina::material::Stack;
+use lamina::output::{EvalReport, EvalSample};
 use lamina::render::Renderer;
+use lamina::render::{eval::GpuEvaluator, furnace, sheet};
 use lamina::shader::VariantKey;
 use lamina::tables::environment::EnvDesc;
 use lamina::vk::{DeviceSelector, InstanceDesc};
@@ -41,6 +43,72 @@ enum Command {
     Devices,
     /// Render the sphere under an environment to EXR and PNG, and print the GPU time.
     Render(RenderArgs),
+    /// Evaluate a material's model at view cosines: total R, T and the lobes.
+    Eval(EvalArgs),
+    /// White-furnace test: reflected energy per view angle under a uniform white environment.
+    Furnace(FurnaceArgs),
+    /// Render every preset material in each variant into one tiled PNG.
+    Sheet(SheetArgs),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum Backend {
+    Cpu,
+    Gpu,
+}
+
+#[derive(clap::Args)]
+struct EvalArgs {
+    /// Material file or preset name (see assets/materials/).
+    #[arg(long, value_name = "FILE|PRESET")]
+    material: String,
+    /// View cosines, comma-separated, each in (0, 1].
+    #[arg(
+        long = "cos",
+        value_name = "LIST",
+        value_delimiter = ',',
+        required = true
+    )]
+    cosines: Vec<f64>,
+    #[arg(long, value_enum, default_value_t = Backend::Gpu)]
+    backend: Backend,
+    /// Shader variant; axes not given come from the defaults and the material's model.
+    #[arg(long, value_name = "KEY")]
+    variant: Option<String>,
+    /// Print the JSON of DESIGN.md §5 instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(clap::Args)]
+struct FurnaceArgs {
+    /// Material file or preset name.
+    #[arg(long, value_name = "FILE|PRESET")]
+    material: String,
+    /// Shader variant; axes not given come from the defaults and the material's model.
+    #[arg(long, value_name = "KEY")]
+    variant: Option<String>,
+    /// Number of view-cosine bins.
+    #[arg(long, default_value_t = 10, value_name = "N")]
+    bins: usize,
+}
+
+#[derive(clap::Args)]
+struct SheetArgs {
+    /// Variants, one column each (default: model=tm2 and model=tm6).
+    #[arg(long = "variant", value_name = "KEY")]
+    variants: Vec<String>,
+    /// Side of one tile in pixels.
+    #[arg(long, default_value_t = 256, value_name = "PIXELS")]
+    tile: u32,
+    /// Equirectangular OpenEXR environment map.
+    #[arg(long, value_name = "FILE", default_value = "assets/env/studio.exr")]
+    env: PathBuf,
+    #[arg(long, value_name = "FILE.png", default_value = "out/sheet.png")]
+    out: PathBuf,
+    /// Exposure of the PNG, in stops.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
 }
 
 #[derive(clap::Args)]
@@ -51,9 +119,13 @@ struct RenderArgs {
     /// Equirectangular OpenEXR environment map.
     #[arg(long, value_name = "FILE", default_value = "assets/env/studio.exr")]
     env: PathBuf,
-    /// Shader variant, e.g. `model=ggx,fp16=on` (unset axes take their defaults).
-    #[arg(long, value_name = "KEY", default_value_t = VariantKey::default())]
-    variant: VariantKey,
+    /// Material file or preset name (see assets/materials/).
+    #[arg(long, value_name = "FILE|PRESET", default_value = "gold")]
+    material: String,
+    /// Shader variant, e.g. `model=ggx,fp16=on`; axes not given take their defaults, with the
+    /// model from the material file.
+    #[arg(long, value_name = "KEY")]
+    variant: Option<String>,
     /// Linear HDR output (RGBA half).
     #[arg(long, value_name = "FILE.exr", default_value = "out/render.exr")]
     out: PathBuf,
@@ -160,21 +232,155 @@ fn devices(cli: &Cli) -> Result<()> {
     Ok(())
 }
 
+/// Loads the material and builds its variant: axes the key leaves out come from the defaults,
+/// the model from the material, and `max_layers` grows to fit the stack.
+fn material_and_variant(material: &str, key: Option<&str>) -> Result<(Stack, VariantKey)> {
+    let stack = Stack::resolve(material)?;
+    let base = VariantKey {
+        model: stack.model,
+        max_layers: VariantKey::default()
+            .max_layers
+            .max(stack.layers.len() as u32),
+        ..VariantKey::default()
+    };
+    let variant = match key {
+        Some(k) => VariantKey::parse_over(k, base)?,
+        None => base,
+    };
+    stack.check_fits(variant.max_layers)?;
+    Ok((stack, variant))
+}
+
+fn eval(cli: &Cli, args: &EvalArgs) -> Result<()> {
+    let (stack, variant) = material_and_variant(&args.material, args.variant.as_deref())?;
+    if let Some(c) = args
+        .cosines
+        .iter()
+        .find(|c| !(c.is_finite() && **c > 0.0 && **c <= 1.0))
+    {
+        anyhow::bail!("--cos: {c} is not a view cosine; each must be in (0, 1]");
+    }
+    if args.backend == Backend::Cpu {
+        anyhow::bail!(
+            "--backend cpu: the f64 oracle of the model is not in this build yet (issue #3); \
+             use --backend gpu"
+        );
+    }
+    let gpu = open_gpu(cli)?;
+    let evaluator = GpuEvaluator::new(&gpu, variant)?;
+    let results = evaluator.evaluate(&stack.params(), &args.cosines)?;
+    let report = EvalReport {
+        material: stack.name.clone(),
+        model: variant.model.to_string(),
+        backend: "gpu".into(),
+        samples: args
+            .cosines
+            .iter()
+            .zip(&results)
+            .map(|(&c, e)| EvalSample::new(c, e))
+            .collect(),
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print!("{}", report.table());
+    }
+    check_validation(&gpu)
+}
+
+fn run_furnace(cli: &Cli, args: &FurnaceArgs) -> Result<()> {
+    if !(1..=256).contains(&args.bins) {
+        anyhow::bail!("--bins {}: must be in 1..=256", args.bins);
+    }
+    let (stack, variant) = material_and_variant(&args.material, args.variant.as_deref())?;
+    let gpu = open_gpu(cli)?;
+    let bins = furnace::gpu(&gpu, variant, &stack.params(), 256, args.bins)?;
+    println!(
+        "white furnace: {} ({variant}), GPU render at 256x256",
+        stack.name
+    );
+    println!(
+        "{:>8}  {:>8}  {:>8}  {:>8}  {:>7}",
+        "cos θ", "R", "G", "B", "pixels"
+    );
+    for b in &bins {
+        println!(
+            "{:>8.4}  {:>8.5}  {:>8.5}  {:>8.5}  {:>7}",
+            b.cos_theta, b.energy[0], b.energy[1], b.energy[2], b.samples
+        );
+    }
+    let (min, mean, max) = furnace::summary(&bins);
+    println!("min {min:.5}  mean {mean:.5}  max {max:.5}");
+    check_validation(&gpu)
+}
+
+fn run_sheet(cli: &Cli, args: &SheetArgs) -> Result<()> {
+    let env_path = asset_path(&args.env);
+    let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
+    let keys: Vec<String> = if args.variants.is_empty() {
+        vec!["model=tm2".into(), "model=tm6".into()]
+    } else {
+        args.variants.clone()
+    };
+    let mut rows = Vec::new();
+    let mut max_layers = 1;
+    for path in lamina::material::presets() {
+        let stack = Stack::load(&path)?;
+        max_layers = max_layers.max(stack.layers.len() as u32);
+        rows.push(sheet::SheetRow {
+            name: stack.name.clone(),
+            layers: stack.params(),
+        });
+    }
+    let base = VariantKey {
+        max_layers: VariantKey::default().max_layers.max(max_layers),
+        ..VariantKey::default()
+    };
+    let variants = keys
+        .iter()
+        .map(|k| VariantKey::parse_over(k, base))
+        .collect::<Result<Vec<_>, _>>()?;
+    let gpu = open_gpu(cli)?;
+    let (w, h, rgba) = sheet::render(&gpu, &equirect, &rows, &variants, args.tile, args.exposure)?;
+    check_validation(&gpu)?;
+    imageio::write_png(&args.out, w, h, &rgba)?;
+    println!(
+        "rows (top to bottom): {}",
+        rows.iter()
+            .map(|r| r.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    println!(
+        "columns: {}",
+        variants
+            .iter()
+            .map(|v| v.to_string())
+            .collect::<Vec<_>>()
+            .join(" | ")
+    );
+    println!("wrote {}", args.out.display());
+    Ok(())
+}
+
+fn check_validation(gpu: &Gpu) -> Result<()> {
+    let problems = gpu.device.validation_problems();
+    if problems > 0 {
+        anyhow::bail!(
+            "the validation layer reported {problems} problem(s); see the messages above"
+        );
+    }
+    Ok(())
+}
+
 fn render(cli: &Cli, args: &RenderArgs) -> Result<()> {
     let env_path = asset_path(&args.env);
     let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
+    let (stack, variant) = material_and_variant(&args.material, args.variant.as_deref())?;
+    let layers = stack.params();
     let gpu = open_gpu(cli)?;
     let mut renderer = Renderer::new(&gpu, &equirect, EnvDesc::default())?;
-    let pass = renderer.prepare(args.variant)?;
-    let layers = [LayerParams {
-        ior: [0.143245, 0.377423, 1.43919],
-        kappa: [3.98479, 2.3847, 1.60434],
-        roughness: 0.2,
-        depth: 0.0,
-        sigma_s: [0.0; 3],
-        sigma_a: [0.0; 3],
-        g: 0.0,
-    }];
+    let pass = renderer.prepare(variant)?;
     for _ in 0..args.warmup {
         renderer.render(&pass, &layers, args.size.width, args.size.height)?;
     }
@@ -203,7 +409,12 @@ fn render(cli: &Cli, args: &RenderArgs) -> Result<()> {
         gpu.device.report.name, gpu.device.report.driver_info
     );
     println!("environment: {}", env_path.display());
-    println!("variant:     {}", args.variant);
+    println!(
+        "material:    {} ({} layers)",
+        stack.name,
+        stack.layers.len()
+    );
+    println!("variant:     {variant}");
     println!(
         "size:        {}x{} (measured after {} warm-up frame(s))",
         frame.width, frame.height, args.warmup
@@ -232,6 +443,9 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Devices => devices(&cli),
         Command::Render(args) => render(&cli, args),
+        Command::Eval(args) => eval(&cli, args),
+        Command::Furnace(args) => run_furnace(&cli, args),
+        Command::Sheet(args) => run_sheet(&cli, args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -125,5 +125,63 @@ fn zero_and_malformed_sizes_are_named() {
 #[test]
 fn unimplemented_axis_value_is_refused_before_writing() {
     let dir = common::scratch_dir("cli-tir");
-    assert_rejected(&["--variant", "tir=lut32"], &dir, &["tir", "not implemented"]);
+    assert_rejected(
+        &["--variant", "tir=lut32"],
+        &dir,
+        &["tir", "not implemented"],
+    );
+}
+
+#[test]
+fn bad_material_file_is_named() {
+    let dir = common::scratch_dir("cli-bad-material");
+    let input = common::scratch_dir("cli-bad-material-input").join("typo.toml");
+    std::fs::write(&input, "[[layer]]\nior = [1.5, 1.5, 1.5]\nroughnes = 0.1\n").unwrap();
+    assert_rejected(
+        &["--material", input.to_str().unwrap()],
+        &dir,
+        &["typo.toml", "layer 1", "`roughnes`", "unknown key"],
+    );
+    assert_rejected(&["--material", "unobtainium"], &dir, &["unobtainium"]);
+    assert_rejected(
+        &["--material", "five-layers", "--variant", "max_layers=4"],
+        &dir,
+        &["5 layers", "max_layers=4"],
+    );
+}
+
+#[test]
+fn eval_prints_the_documented_json() {
+    let dir = common::scratch_dir("cli-eval");
+    let out = lamina(
+        &[
+            "--validation",
+            "eval",
+            "--material",
+            "varnished-gold",
+            "--cos",
+            "0.1,0.5,1",
+            "--json",
+        ],
+        &dir,
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["material"], "varnished gold");
+    assert_eq!(json["model"], "tm2");
+    assert_eq!(json["backend"], "gpu");
+    let samples = json["samples"].as_array().unwrap();
+    assert_eq!(samples.len(), 3);
+    for s in samples {
+        let lobes = s["lobes"].as_array().unwrap();
+        assert_eq!(lobes.len(), 2, "one lobe per layer");
+        for c in 0..3 {
+            let sum: f64 = lobes.iter().map(|l| l["weight"][c].as_f64().unwrap()).sum();
+            let r = s["reflectance"][c].as_f64().unwrap();
+            assert!(
+                (sum - r).abs() < 1e-5,
+                "lobe weights {sum} vs reflectance {r}"
+            );
+        }
+    }
 }

@@ -107,3 +107,32 @@ fn furnace_shows_no_energy_gain_for_lossless_stacks() {
     }
     common::assert_validation_clean(&gpu);
 }
+
+/// Every preset renders at 256×256 in tm2 and tm6 with no NaN/Inf pixel (the sheet renderer
+/// refuses non-finite pixels) and no validation message.
+#[test]
+fn every_preset_renders_in_tm2_and_tm6() {
+    use lamina::material::{presets, Stack};
+    use lamina::render::sheet;
+    use lamina::shader::VariantKey;
+
+    let gpu = common::gpu();
+    let rows: Vec<sheet::SheetRow> = presets()
+        .iter()
+        .map(|p| {
+            let stack = Stack::load(p).unwrap();
+            sheet::SheetRow {
+                name: stack.name.clone(),
+                layers: stack.params(),
+            }
+        })
+        .collect();
+    assert!(rows.len() >= 8);
+    let variants: Vec<VariantKey> = ["model=tm2,max_layers=5", "model=tm6,max_layers=5"]
+        .iter()
+        .map(|k| k.parse().unwrap())
+        .collect();
+    let (w, h, _) = sheet::render(&gpu, &common::studio(), &rows, &variants, 256, 0.0).unwrap();
+    assert!(w > 512 && h > 256 * rows.len());
+    common::assert_validation_clean(&gpu);
+}
