@@ -9,9 +9,12 @@ use clap::{Parser, Subcommand};
 
 use lamina::imageio;
 use lamina::material::Stack;
+use lamina::model::fgd::ExactFgd;
+use lamina::model::{tm2, tm6, Evaluation, LayerParams, NoTir};
 use lamina::output::{EvalReport, EvalSample};
 use lamina::render::Renderer;
 use lamina::render::{eval::GpuEvaluator, furnace, sheet};
+use lamina::shader::Model;
 use lamina::shader::VariantKey;
 use lamina::tables::environment::EnvDesc;
 use lamina::vk::{DeviceSelector, InstanceDesc};
@@ -260,19 +263,26 @@ fn eval(cli: &Cli, args: &EvalArgs) -> Result<()> {
     {
         anyhow::bail!("--cos: {c} is not a view cosine; each must be in (0, 1]");
     }
-    if args.backend == Backend::Cpu {
-        anyhow::bail!(
-            "--backend cpu: the f64 oracle of the model is not in this build yet (issue #3); \
-             use --backend gpu"
-        );
-    }
-    let gpu = open_gpu(cli)?;
-    let evaluator = GpuEvaluator::new(&gpu, variant)?;
-    let results = evaluator.evaluate(&stack.params(), &args.cosines)?;
+    let (backend, results) = match args.backend {
+        Backend::Cpu => (
+            "cpu",
+            args.cosines
+                .iter()
+                .map(|&c| cpu_model(variant, &stack.params(), c))
+                .collect::<Vec<_>>(),
+        ),
+        Backend::Gpu => {
+            let gpu = open_gpu(cli)?;
+            let evaluator = GpuEvaluator::new(&gpu, variant)?;
+            let results = evaluator.evaluate(&stack.params(), &args.cosines)?;
+            check_validation(&gpu)?;
+            ("gpu", results)
+        }
+    };
     let report = EvalReport {
         material: stack.name.clone(),
         model: variant.model.to_string(),
-        backend: "gpu".into(),
+        backend: backend.into(),
         samples: args
             .cosines
             .iter()
@@ -285,7 +295,17 @@ fn eval(cli: &Cli, args: &EvalArgs) -> Result<()> {
     } else {
         print!("{}", report.table());
     }
-    check_validation(&gpu)
+    Ok(())
+}
+
+/// The f64 oracle: the variant's model with exactly integrated FGD (its G2 form) and no TIR
+/// correction.
+fn cpu_model(variant: VariantKey, layers: &[LayerParams], cos_theta: f64) -> Evaluation {
+    let fgd = ExactFgd::new(variant.g2);
+    match variant.model {
+        Model::Tm6 => tm6::evaluate(layers, cos_theta, &fgd, &NoTir),
+        _ => tm2::evaluate(layers, cos_theta, &fgd, &NoTir),
+    }
 }
 
 fn run_furnace(cli: &Cli, args: &FurnaceArgs) -> Result<()> {
@@ -294,24 +314,46 @@ fn run_furnace(cli: &Cli, args: &FurnaceArgs) -> Result<()> {
     }
     let (stack, variant) = material_and_variant(&args.material, args.variant.as_deref())?;
     let gpu = open_gpu(cli)?;
-    let bins = furnace::gpu(&gpu, variant, &stack.params(), 256, args.bins)?;
+    let layers = stack.params();
+    let bins = furnace::gpu(&gpu, variant, &layers, 256, args.bins)?;
+    check_validation(&gpu)?;
+    let cosines: Vec<f64> = bins.iter().map(|b| b.cos_theta).collect();
+    let cpu = furnace::cpu(&cosines, |c| {
+        if variant.model == Model::Ggx {
+            let top = VariantKey {
+                model: Model::Tm2,
+                ..variant
+            };
+            cpu_model(top, &layers[..1], c).reflectance
+        } else {
+            cpu_model(variant, &layers, c).reflectance
+        }
+    });
+    println!("white furnace: {} ({variant})", stack.name);
     println!(
-        "white furnace: {} ({variant}), GPU render at 256x256",
-        stack.name
+        "GPU: the sphere rendered at 256x256 under radiance 1, binned by n·v (FGD: {})",
+        variant.fgd
     );
+    println!("CPU: the f64 model with exactly integrated FGD at each bin's mean n·v");
     println!(
-        "{:>8}  {:>8}  {:>8}  {:>8}  {:>7}",
-        "cos θ", "R", "G", "B", "pixels"
+        "{:>7}  {:>22}  {:>22}  {:>7}",
+        "cos θ", "GPU energy R G B", "CPU energy R G B", "pixels"
     );
-    for b in &bins {
+    let rgb = |v: [f64; 3]| format!("{:.4} {:.4} {:.4}", v[0], v[1], v[2]);
+    for (g, c) in bins.iter().zip(&cpu) {
         println!(
-            "{:>8.4}  {:>8.5}  {:>8.5}  {:>8.5}  {:>7}",
-            b.cos_theta, b.energy[0], b.energy[1], b.energy[2], b.samples
+            "{:>7.4}  {:>22}  {:>22}  {:>7}",
+            g.cos_theta,
+            rgb(g.energy),
+            rgb(c.energy),
+            g.samples
         );
     }
-    let (min, mean, max) = furnace::summary(&bins);
-    println!("min {min:.5}  mean {mean:.5}  max {max:.5}");
-    check_validation(&gpu)
+    for (name, set) in [("GPU", &bins), ("CPU", &cpu)] {
+        let (min, mean, max) = furnace::summary(set);
+        println!("{name}: min {min:.5}  mean {mean:.5}  max {max:.5}");
+    }
+    Ok(())
 }
 
 fn run_sheet(cli: &Cli, args: &SheetArgs) -> Result<()> {

@@ -151,25 +151,33 @@ fn bad_material_file_is_named() {
 }
 
 #[test]
-fn eval_prints_the_documented_json() {
+fn eval_prints_the_documented_json_on_both_backends() {
     let dir = common::scratch_dir("cli-eval");
-    let out = lamina(
-        &[
-            "--validation",
-            "eval",
-            "--material",
-            "varnished-gold",
-            "--cos",
-            "0.1,0.5,1",
-            "--json",
-        ],
-        &dir,
-    );
-    assert!(out.status.success(), "{}", stderr(&out));
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for backend in ["gpu", "cpu"] {
+        let out = lamina(
+            &[
+                "--validation",
+                "eval",
+                "--material",
+                "varnished-gold",
+                "--cos",
+                "0.1,0.5,1",
+                "--backend",
+                backend,
+                "--json",
+            ],
+            &dir,
+        );
+        assert!(out.status.success(), "{}", stderr(&out));
+        check_eval_json(&out.stdout, backend);
+    }
+}
+
+fn check_eval_json(stdout: &[u8], backend: &str) {
+    let json: serde_json::Value = serde_json::from_slice(stdout).unwrap();
     assert_eq!(json["material"], "varnished gold");
     assert_eq!(json["model"], "tm2");
-    assert_eq!(json["backend"], "gpu");
+    assert_eq!(json["backend"], backend);
     let samples = json["samples"].as_array().unwrap();
     assert_eq!(samples.len(), 3);
     for s in samples {

@@ -10,7 +10,11 @@ pub fn gulbrandsen(r: f64, g: f64) -> (f64, f64) {
     let sqrt_r = r.sqrt();
     let n = g * (1.0 - r) / (1.0 + r) + (1.0 - g) * (1.0 + sqrt_r) / (1.0 - sqrt_r);
     let k2 = (r * (1.0 + n).powi(2) - (n - 1.0).powi(2)) / (1.0 - r);
-    let k2 = if k2 < 1e-12 * (1.0 + n).powi(2) { 0.0 } else { k2 };
+    let k2 = if k2 < 1e-12 * (1.0 + n).powi(2) {
+        0.0
+    } else {
+        k2
+    };
     (n, k2.sqrt())
 }
 

@@ -11,7 +11,12 @@
 //! (no dispersion), a conductor's (η, κ) is per channel; relative IORs are η_{i+1}/η_i and
 //! κ_{i+1}/η_i; roughness is GGX α.
 
+pub mod fgd;
+pub mod fresnel;
+pub mod hg;
 pub mod microfacet;
+pub mod tm2;
+pub mod tm6;
 
 /// IOR of the medium above the top layer. lamina uses vacuum (1.0), so a single conductor layer
 /// has exactly the F0 the `ggx` baseline uses; the reference's Mitsuba air is 1.000277.

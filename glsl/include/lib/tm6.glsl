@@ -24,8 +24,8 @@ const uint TM6_MAX_COMPONENTS = 2u * MAX_LAYERS;
 // with their HG g's. Media: T (primary transmission), r_fb, t_ff with g's (in r, t, r_ff, t_ff).
 struct Tm6Component {
     uint kind;
-    real3 r, t, rp, tp;           // primary
-    real3 rs, ts, rsp, tsp;       // secondary
+    vec3 r, t, rp, tp;            // primary
+    vec3 rs, ts, rsp, tsp;        // secondary (media: T in t, r_fb in rs, t_ff in ts)
     vec4 g_primary;               // g of r, t, r', t'
     vec4 g_secondary;             // g of r_ff, t_ff, r'_ff, t'_ff
     float mu;                     // |cos| of the mean direction arriving from above
@@ -76,20 +76,28 @@ Tm6Matrix tm6_interface(real3 r, real3 t, real3 rp, real3 tp,
     return a;
 }
 
-// Homogeneous medium from T, r_fb, t_ff (§5.4); the backward pair mirrors the forward pair.
-Tm6Matrix tm6_medium(real3 transmission, real3 r_fb, real3 t_ff) {
+// Homogeneous medium from T, r_fb, t_ff (§5.4), scaled by the power of two `k` ≤ 1 that
+// brings its largest entries (1/T, 1/t_ff) to at most 1: a thick medium makes them overflow
+// half floats. Entries are formed in float and narrowed after scaling.
+Tm6Matrix tm6_medium(vec3 transmission, vec3 r_fb, vec3 t_ff, out float k) {
+    float smallest = min(min(min(transmission.r, transmission.g), transmission.b),
+                         min(min(t_ff.r, t_ff.g), t_ff.b));
+    k = exp2(min(floor(log2(max(smallest, 1e-30))), 0.0));
     Tm6Matrix a = tm6_identity();
-    real3 inv = real3(1.0) / t_ff;
-    a.m[0][0] = real3(1.0) / transmission;
-    a.m[1][1] = transmission;
-    a.m[2][2] = inv;
-    a.m[3][3] = t_ff - r_fb * r_fb * inv;
-    a.m[2][5] = -r_fb * inv;
-    a.m[4][1] = -r_fb * inv;
-    a.m[3][4] = r_fb * inv;
-    a.m[5][0] = r_fb * inv;
-    a.m[2][0] = a.m[2][2] - a.m[0][0];
-    a.m[3][1] = a.m[3][3] - transmission;
+    vec3 inv = 1.0 / t_ff;
+    vec3 m00 = 1.0 / transmission;
+    vec3 m22 = inv;
+    vec3 m33 = t_ff - r_fb * r_fb * inv;
+    a.m[0][0] = real3(m00 * k);
+    a.m[1][1] = real3(transmission * k);
+    a.m[2][2] = real3(m22 * k);
+    a.m[3][3] = real3(m33 * k);
+    a.m[2][5] = real3(-r_fb * inv * k);
+    a.m[4][1] = a.m[2][5];
+    a.m[3][4] = real3(r_fb * inv * k);
+    a.m[5][0] = a.m[3][4];
+    a.m[2][0] = real3((m22 - m00) * k);
+    a.m[3][1] = real3((m33 - transmission) * k);
     // (5,6) mirrors (3,4): M55 = M33, M66 = M44, M54 = M36, M63 = M45.
     a.m[4][4] = a.m[2][2];
     a.m[5][5] = a.m[3][3];
@@ -98,28 +106,49 @@ Tm6Matrix tm6_medium(real3 transmission, real3 r_fb, real3 t_ff) {
     return a;
 }
 
+// Scales `a` by the power of two that brings its largest entry near 1 and returns that factor.
+// Exact in binary floating point, so it changes nothing but the range: the reflectances are
+// ratios, and callers divide transmitted fluxes by the accumulated factor.
+float tm6_normalize(inout Tm6Matrix a) {
+    float largest = 0.0;
+    for (int i = 0; i < 6; ++i) {
+        for (int j = 0; j < 6; ++j) {
+            vec3 v = abs(vec3(a.m[i][j]));
+            largest = max(largest, max(max(v.r, v.g), v.b));
+        }
+    }
+    float p = exp2(-floor(log2(max(largest, 1e-30))));
+    for (int i = 0; i < 6; ++i) {
+        for (int j = 0; j < 6; ++j) {
+            a.m[i][j] *= real(p);
+        }
+    }
+    return p;
+}
+
 // The three upward fluxes (r, r_f, r_b) above a composed stack whose bottom reflects every
 // class with r_c (0: nothing below), and the three downward fluxes at its bottom, from the
-// top conditions a1 = 1, a3 = a5 = 0 (§5.1, §5.6).
-void tm6_extract(Tm6Matrix a, real3 r_c, out real3 up[3], out real3 down[3]) {
-    real3 c[3][3];
+// top conditions a1 = 1, a3 = a5 = 0 (§5.1, §5.6). Solved in float whatever `real` is: the
+// determinant of normalized entries can fall below the half-float range.
+void tm6_extract(Tm6Matrix a, vec3 r_c, out vec3 up[3], out vec3 down[3]) {
+    vec3 c[3][3];
     for (int row = 0; row < 3; ++row) {
         for (int col = 0; col < 3; ++col) {
-            c[row][col] = a.m[2 * row][2 * col] + a.m[2 * row][2 * col + 1] * r_c;
+            c[row][col] = vec3(a.m[2 * row][2 * col]) + vec3(a.m[2 * row][2 * col + 1]) * r_c;
         }
     }
     // Cramer's rule for c · (b1, b3, b5) = (1, 0, 0).
-    real3 det = c[0][0] * (c[1][1] * c[2][2] - c[1][2] * c[2][1])
-              - c[0][1] * (c[1][0] * c[2][2] - c[1][2] * c[2][0])
-              + c[0][2] * (c[1][0] * c[2][1] - c[1][1] * c[2][0]);
-    real3 inv_det = real3(1.0) / det;
+    vec3 det = c[0][0] * (c[1][1] * c[2][2] - c[1][2] * c[2][1])
+             - c[0][1] * (c[1][0] * c[2][2] - c[1][2] * c[2][0])
+             + c[0][2] * (c[1][0] * c[2][1] - c[1][1] * c[2][0]);
+    vec3 inv_det = 1.0 / det;
     down[0] = (c[1][1] * c[2][2] - c[1][2] * c[2][1]) * inv_det;
     down[1] = -(c[1][0] * c[2][2] - c[1][2] * c[2][0]) * inv_det;
     down[2] = (c[1][0] * c[2][1] - c[1][1] * c[2][0]) * inv_det;
     for (int row = 0; row < 3; ++row) {
-        real3 s = real3(0.0);
+        vec3 s = vec3(0.0);
         for (int col = 0; col < 3; ++col) {
-            s += (a.m[2 * row + 1][2 * col] + a.m[2 * row + 1][2 * col + 1] * r_c) * down[col];
+            s += (vec3(a.m[2 * row + 1][2 * col]) + vec3(a.m[2 * row + 1][2 * col + 1]) * r_c) * down[col];
         }
         up[row] = s;
     }
@@ -179,8 +208,8 @@ void tm6_components(MaterialGpu material, float mu, inout Tm6Component comps[TM6
         float g_r = hg_g_of_alpha(c.alpha);
         if (tm_is_conductor(layer)) {
             c.kind = TM6_CONDUCTOR;
-            c.r = real3(fgd_rgb(cos_i, c.alpha, layer.ior.rgb / eta_above, layer.kappa.rgb / eta_above));
-            c.t = real3(0.0); c.rp = real3(0.0); c.tp = real3(0.0);
+            c.r = vec3(fgd_rgb(cos_i, c.alpha, layer.ior.rgb / eta_above, layer.kappa.rgb / eta_above));
+            c.t = vec3(0.0); c.rp = vec3(0.0); c.tp = vec3(0.0);
             c.rs = c.r; c.ts = c.t; c.rsp = c.rp; c.tsp = c.tp;
             c.g_primary = vec4(g_r, 0.0, 0.0, 0.0);
             c.g_secondary = c.g_primary;
@@ -191,8 +220,9 @@ void tm6_components(MaterialGpu material, float mu, inout Tm6Component comps[TM6
         c.eta = eta_layer / eta_above;
         if (abs(c.eta - 1.0) < 1e-5) {
             c.kind = TM6_NONE;
-            c.r = real3(0.0); c.t = real3(1.0); c.rp = real3(0.0); c.tp = real3(1.0);
-            c.g_primary = vec4(0.0, 1.0, 0.0, 1.0);
+            c.r = vec3(0.0); c.t = vec3(1.0); c.rp = vec3(0.0); c.tp = vec3(1.0);
+            // g_r stays: the interface above reads it as its "next reflection" (as in 2-flux).
+            c.g_primary = vec4(g_r, 1.0, g_r, 1.0);
         } else {
             c.kind = TM6_INTERFACE;
             float cos_t = tm_refracted_cos(cos_i, c.eta);
@@ -200,7 +230,7 @@ void tm6_components(MaterialGpu material, float mu, inout Tm6Component comps[TM6
             float s_down = abs(1.0 - cos_i / (c.eta * max(cos_t, 1e-7)));
             float s_up = abs(1.0 - c.eta * cos_t / max(cos_i, 1e-7));
             float r = abs(c.eta - 1.0) < 1e-3 ? 0.0 : fgd_dielectric(cos_i, c.alpha, c.eta);
-            c.r = real3(r); c.rp = real3(r); c.t = real3(1.0 - r); c.tp = real3(1.0 - r);
+            c.r = vec3(r); c.rp = vec3(r); c.t = vec3(1.0 - r); c.tp = vec3(1.0 - r);
             c.g_primary = vec4(g_r, hg_g_of_alpha(0.5 * s_down * c.alpha), g_r,
                                hg_g_of_alpha(0.5 * s_up * c.alpha));
             cos_i = cos_t;
@@ -218,8 +248,8 @@ void tm6_components(MaterialGpu material, float mu, inout Tm6Component comps[TM6
         m.mu_t = cos_i;
         if (layer.params.y <= 0.0) {
             m.kind = TM6_NONE;
-            m.r = real3(0.0); m.t = real3(1.0); m.rp = real3(0.0); m.tp = real3(1.0);
-            m.rs = real3(0.0); m.ts = real3(1.0);
+            m.r = vec3(0.0); m.t = vec3(1.0); m.rp = vec3(0.0); m.tp = vec3(1.0);
+            m.rs = vec3(0.0); m.ts = vec3(1.0);
             m.g_primary = vec4(0.0, 1.0, 0.0, 1.0);
             m.g_secondary = vec4(0.0, 1.0, 0.0, 1.0);
         } else {
@@ -227,9 +257,9 @@ void tm6_components(MaterialGpu material, float mu, inout Tm6Component comps[TM6
             vec3 transmission, r_fb, t_ff;
             float g_rfb, g_tff;
             tm6_medium_factors(layer, cos_i, transmission, r_fb, t_ff, g_rfb, g_tff);
-            m.t = real3(transmission);
-            m.rs = real3(r_fb);
-            m.ts = real3(t_ff);
+            m.t = vec3(transmission);
+            m.rs = vec3(r_fb);
+            m.ts = vec3(t_ff);
             m.g_primary = vec4(0.0, 1.0, 0.0, 1.0);
             m.g_secondary = vec4(g_rfb, g_tff, g_rfb, g_tff);
         }
@@ -255,8 +285,10 @@ uint tm6_evaluate(MaterialGpu material, float mu, inout Lobe lobes[TM_MAX_LOBES]
 
     Tm6Matrix e = tm6_identity();
     Tm6Matrix g = tm6_identity();
-    real3 prev[3] = real3[3](real3(0.0), real3(0.0), real3(0.0));
-    real3 prev_g[3] = real3[3](real3(0.0), real3(0.0), real3(0.0));
+    // e holds the energy matrix times `scale` (see tm6_normalize).
+    float scale = 1.0;
+    vec3 prev[3] = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));
+    vec3 prev_g[3] = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));
     float g_t0i = 1.0;
     float g_st0i = 1.0;
     bool primary = false;
@@ -265,15 +297,14 @@ uint tm6_evaluate(MaterialGpu material, float mu, inout Lobe lobes[TM_MAX_LOBES]
     transmittance = vec3(0.0);
     for (uint ci = 0u; ci < count; ++ci) {
         Tm6Component c = comps[ci];
-        real3 up[3];
-        real3 up_g[3];
-        real3 down[3];
+        vec3 up[3];
+        vec3 up_g[3];
+        vec3 down[3];
         float g_t0j = g_t0i;
         float g_st0j = g_st0i;
         if (c.kind == TM6_CONDUCTOR) {
-            real3 r_c = c.r;
-            tm6_extract(e, r_c, up, down);
-            tm6_extract(g, r_c * real(c.g_primary.x), up_g, down);
+            tm6_extract(e, c.r, up, down);
+            tm6_extract(g, c.r * c.g_primary.x, up_g, down);
             transmittance = vec3(0.0);
             // A bare substrate emits its primary lobe too (the reference sets the flag only
             // after a dielectric, which would leave a single conductor without any lobe).
@@ -295,42 +326,48 @@ uint tm6_evaluate(MaterialGpu material, float mu, inout Lobe lobes[TM_MAX_LOBES]
                 c.g_secondary.y = g_st0i > 0.0 ? g_st0j / g_st0i : 0.0;
                 c.g_secondary.w = g_st0j_r > 0.0 ? g_st0j_rt / g_st0j_r : 0.0;
                 if (c.eta < 1.0) {
-                    real3 tau = real(tir_fraction(c.mu, hg_alpha_of_g(g_t0i), c.eta)) * c.t;
+                    vec3 tau = tir_fraction(c.mu, hg_alpha_of_g(g_t0i), c.eta) * c.t;
                     c.r += tau; c.t -= tau;
-                    real3 tau_s = real(tir_fraction(c.mu, hg_alpha_of_g(g_st0i), c.eta)) * c.ts;
+                    vec3 tau_s = tir_fraction(c.mu, hg_alpha_of_g(g_st0i), c.eta) * c.ts;
                     c.rs += tau_s; c.ts -= tau_s;
                 } else {
-                    real3 tau = real(tir_fraction(c.mu_t, hg_alpha_of_g(g_t0j_r), 1.0 / c.eta)) * c.tp;
+                    vec3 tau = tir_fraction(c.mu_t, hg_alpha_of_g(g_t0j_r), 1.0 / c.eta) * c.tp;
                     c.rp += tau; c.tp -= tau;
-                    real3 tau_s = real(tir_fraction(c.mu_t, hg_alpha_of_g(g_st0j_r), 1.0 / c.eta)) * c.tsp;
+                    vec3 tau_s = tir_fraction(c.mu_t, hg_alpha_of_g(g_st0j_r), 1.0 / c.eta) * c.tsp;
                     c.rsp += tau_s; c.tsp -= tau_s;
                 }
-                e = tm6_mul(e, tm6_interface(c.r, c.t, c.rp, c.tp, c.rs, c.ts, c.rsp, c.tsp));
+                e = tm6_mul(e, tm6_interface(real3(c.r), real3(c.t), real3(c.rp), real3(c.tp),
+                                             real3(c.rs), real3(c.ts), real3(c.rsp), real3(c.tsp)));
+                scale *= tm6_normalize(e);
                 g = tm6_mul(g, tm6_interface(
-                    c.r * real(c.g_primary.x), c.t * real(c.g_primary.y),
-                    c.rp * real(c.g_primary.z), c.tp * real(c.g_primary.w),
-                    c.rs * real(c.g_secondary.x), c.ts * real(c.g_secondary.y),
-                    c.rsp * real(c.g_secondary.z), c.tsp * real(c.g_secondary.w)));
+                    real3(c.r * c.g_primary.x), real3(c.t * c.g_primary.y),
+                    real3(c.rp * c.g_primary.z), real3(c.tp * c.g_primary.w),
+                    real3(c.rs * c.g_secondary.x), real3(c.ts * c.g_secondary.y),
+                    real3(c.rsp * c.g_secondary.z), real3(c.tsp * c.g_secondary.w)));
+                tm6_normalize(g);
                 primary = true;
             } else if (c.kind == TM6_MEDIUM) {
-                e = tm6_mul(e, tm6_medium(c.t, c.rs, c.ts));
-                g = tm6_mul(g, tm6_medium(c.t, c.rs * real(c.g_secondary.x), c.ts * real(c.g_secondary.y)));
+                float k;
+                e = tm6_mul(e, tm6_medium(c.t, c.rs, c.ts, k));
+                scale *= k * tm6_normalize(e);
+                g = tm6_mul(g, tm6_medium(c.t, c.rs * c.g_secondary.x, c.ts * c.g_secondary.y, k));
+                tm6_normalize(g);
                 backward = true;
             }
-            tm6_extract(e, real3(0.0), up, down);
-            transmittance = vec3(down[0] + down[1] + down[2]);
-            tm6_extract(g, real3(0.0), up_g, down);
+            tm6_extract(e, vec3(0.0), up, down);
+            transmittance = (down[0] + down[1] + down[2]) * scale;
+            tm6_extract(g, vec3(0.0), up_g, down);
         }
         // Emit primary, secondary-forward, secondary-backward lobes (§5.7).
         bool emit[3] = bool[3](primary, primary && backward, backward);
         for (int k = 0; k < 3; ++k) {
-            real3 delta = max(up[k] - prev[k], real3(0.0));
+            vec3 delta = max(up[k] - prev[k], vec3(0.0));
             if (emit[k]) {
-                vec3 dg = vec3(up_g[k] - prev_g[k]);
-                vec3 dr = vec3(up[k] - prev[k]);
+                vec3 dg = up_g[k] - prev_g[k];
+                vec3 dr = up[k] - prev[k];
                 float lobe_g = min((tm6_safe_ratio(dg.r, dr.r) + tm6_safe_ratio(dg.g, dr.g)
                                     + tm6_safe_ratio(dg.b, dr.b)) / 3.0, 1.0);
-                lobes[lobe_count++] = Lobe(vec3(delta), hg_alpha_of_g(lobe_g),
+                lobes[lobe_count++] = Lobe(delta, hg_alpha_of_g(lobe_g),
                                            k == 2 ? LOBE_RETRO : LOBE_MIRROR);
             }
             prev[k] = up[k];
@@ -339,7 +376,7 @@ uint tm6_evaluate(MaterialGpu material, float mu, inout Lobe lobes[TM_MAX_LOBES]
         g_t0i = g_t0j;
         g_st0i = g_st0j;
     }
-    reflectance = vec3(prev[0] + prev[1] + prev[2]);
+    reflectance = prev[0] + prev[1] + prev[2];
     return lobe_count;
 }
 
