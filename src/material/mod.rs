@@ -27,42 +27,12 @@ use crate::shader::Model;
 
 pub use artist::gulbrandsen;
 
-/// One layer: the interface at its top and, for the 6-flux model, the medium filling it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Layer {
-    pub ior: [f64; 3],
-    pub kappa: [f64; 3],
-    pub roughness: f64,
-    pub depth: f64,
-    pub sigma_s: [f64; 3],
-    pub sigma_a: [f64; 3],
-    pub g: f64,
-}
-
-impl Layer {
-    pub fn is_conductor(&self) -> bool {
-        self.kappa.iter().any(|&k| k > 0.0)
-    }
-
-    pub fn params(&self) -> LayerParams {
-        LayerParams {
-            ior: self.ior,
-            kappa: self.kappa,
-            roughness: self.roughness,
-            depth: self.depth,
-            sigma_s: self.sigma_s,
-            sigma_a: self.sigma_a,
-            g: self.g,
-        }
-    }
-}
-
 /// A named stack of layers, top first, with the model it is meant for.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Stack {
     pub name: String,
     pub model: Model,
-    pub layers: Vec<Layer>,
+    pub layers: Vec<LayerParams>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -159,8 +129,9 @@ impl Stack {
         parse::write(self)
     }
 
+    /// The layers as the model consumes them.
     pub fn params(&self) -> Vec<LayerParams> {
-        self.layers.iter().map(Layer::params).collect()
+        self.layers.clone()
     }
 
     /// Errs when the stack has more layers than a variant's static array size.

@@ -10,7 +10,8 @@ use std::path::Path;
 use toml::{Table, Value};
 
 use super::artist::gulbrandsen;
-use super::{Layer, MaterialError, Stack};
+use super::{MaterialError, Stack};
+use crate::model::LayerParams;
 use crate::shader::{Axis, Model};
 
 const TOP_KEYS: &[&str] = &["name", "model", "layer"];
@@ -159,7 +160,7 @@ impl LayerReader<'_> {
         Ok(Some(out))
     }
 
-    fn layer(&self, model: Model) -> Result<Layer, MaterialError> {
+    fn layer(&self, model: Model) -> Result<LayerParams, MaterialError> {
         if let Some(key) = self
             .table
             .keys()
@@ -182,7 +183,7 @@ impl LayerReader<'_> {
                 "missing; the GGX α of the layer's top interface, in [0, 1]",
             )
         })?;
-        Ok(Layer {
+        Ok(LayerParams {
             ior,
             kappa,
             roughness,
@@ -302,7 +303,7 @@ pub(super) fn parse(text: &str, path: &Path) -> Result<Stack, MaterialError> {
     }
     if let Some(i) = stack[..stack.len() - 1]
         .iter()
-        .position(Layer::is_conductor)
+        .position(LayerParams::is_conductor)
     {
         return Err(MaterialError::Field {
             path: path.to_owned(),
