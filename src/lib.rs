@@ -8,7 +8,8 @@
 //! - [`model`] — the CPU reference in f64;
 //! - [`material`] — layers;
 //! - [`imageio`] — EXR/PNG input and atomic output;
-//! - [`output`] — the JSON and tables commands print.
+//! - [`output`] — the JSON and tables commands print;
+//! - [`profile`] — the bench runner, statistics, result files.
 #![warn(unsafe_op_in_unsafe_fn)]
 
 pub mod error;
@@ -17,6 +18,7 @@ pub mod imageio;
 pub mod material;
 pub mod model;
 pub mod output;
+pub mod profile;
 pub mod render;
 pub mod shader;
 pub mod tables;

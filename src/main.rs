@@ -12,6 +12,7 @@ use lamina::material::Stack;
 use lamina::model::fgd::ExactFgd;
 use lamina::model::{tm2, tm6, Evaluation, LayerParams, NoTir};
 use lamina::output::{EvalReport, EvalSample};
+use lamina::profile::bench::{self, BenchConfig};
 use lamina::render::Renderer;
 use lamina::render::{eval::GpuEvaluator, furnace, sheet};
 use lamina::shader::Model;
@@ -52,6 +53,36 @@ enum Command {
     Furnace(FurnaceArgs),
     /// Render every preset material in each variant into one tiled PNG.
     Sheet(SheetArgs),
+    /// Time variants of the shaded draw, interleaved, against the ggx baseline.
+    Bench(BenchArgs),
+}
+
+#[derive(clap::Args)]
+struct BenchArgs {
+    /// A variant to time (repeat the flag); axes not given come from the defaults and the
+    /// material. The ggx baseline is added when absent.
+    #[arg(long = "variant", value_name = "KEY", required = true)]
+    variants: Vec<String>,
+    /// Material file or preset name.
+    #[arg(long, value_name = "FILE|PRESET", default_value = "varnished-gold")]
+    material: String,
+    #[arg(long, default_value = "640x360", value_name = "WxH")]
+    size: Size,
+    /// Measured frames per variant.
+    #[arg(long, default_value_t = 20, value_name = "N")]
+    frames: u32,
+    /// Frames per variant rendered first and discarded.
+    #[arg(long, default_value_t = 2, value_name = "N")]
+    warmup: u32,
+    /// Equirectangular OpenEXR environment map.
+    #[arg(long, value_name = "FILE", default_value = "assets/env/studio.exr")]
+    env: PathBuf,
+    /// Write the results as JSON.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+    /// Write the results as CSV.
+    #[arg(long, value_name = "FILE")]
+    csv: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -405,6 +436,57 @@ fn run_sheet(cli: &Cli, args: &SheetArgs) -> Result<()> {
     Ok(())
 }
 
+fn run_bench(cli: &Cli, args: &BenchArgs) -> Result<()> {
+    if args.frames == 0 {
+        anyhow::bail!("--frames 0: at least one measured frame is needed");
+    }
+    let env_path = asset_path(&args.env);
+    let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
+    let (stack, base) = material_and_variant(&args.material, None)?;
+    let variants = args
+        .variants
+        .iter()
+        .map(|k| {
+            let v = VariantKey::parse_over(k, base)?;
+            stack.check_fits(v.max_layers)?;
+            Ok(v)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let gpu = open_gpu(cli)?;
+    let config = BenchConfig {
+        variants,
+        material: stack.name.clone(),
+        layers: stack.params(),
+        width: args.size.width,
+        height: args.size.height,
+        frames: args.frames,
+        warmup: args.warmup,
+    };
+    let results = bench::run(&gpu, &equirect, &config, |done, total| {
+        eprint!("\rframe {done}/{total}");
+        if done == total {
+            eprintln!();
+        }
+    })?;
+    check_validation(&gpu)?;
+    print!("{}", results.table());
+    if let Some(path) = &args.json {
+        let text = serde_json::to_string_pretty(&results)?;
+        imageio::write_atomically(path, |temp| {
+            std::fs::write(temp, &text).map_err(|e| e.to_string())
+        })?;
+        println!("wrote {}", path.display());
+    }
+    if let Some(path) = &args.csv {
+        let text = results.csv();
+        imageio::write_atomically(path, |temp| {
+            std::fs::write(temp, &text).map_err(|e| e.to_string())
+        })?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
 fn check_validation(gpu: &Gpu) -> Result<()> {
     let problems = gpu.device.validation_problems();
     if problems > 0 {
@@ -488,6 +570,7 @@ fn main() -> ExitCode {
         Command::Eval(args) => eval(&cli, args),
         Command::Furnace(args) => run_furnace(&cli, args),
         Command::Sheet(args) => run_sheet(&cli, args),
+        Command::Bench(args) => run_bench(&cli, args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -193,3 +193,66 @@ fn check_eval_json(stdout: &[u8], backend: &str) {
         }
     }
 }
+
+#[test]
+fn bench_writes_consistent_json_and_csv() {
+    let dir = common::scratch_dir("cli-bench");
+    let out = lamina(
+        &[
+            "--validation",
+            "bench",
+            "--variant",
+            "model=tm2",
+            "--variant",
+            "model=tm2,max_layers=8",
+            "--variant",
+            "model=ggx",
+            "--size",
+            "64x64",
+            "--frames",
+            "3",
+            "--warmup",
+            "1",
+            "--json",
+            "b/results.json",
+            "--csv",
+            "b/results.csv",
+        ],
+        &dir,
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("b/results.json")).unwrap()).unwrap();
+    for key in [
+        "device",
+        "git_rev",
+        "command",
+        "size",
+        "lp_num_threads",
+        "runs",
+    ] {
+        assert!(json.get(key).is_some(), "missing `{key}`");
+    }
+    for key in ["name", "driver", "api_version", "vendor_id"] {
+        assert!(json["device"].get(key).is_some(), "missing device `{key}`");
+    }
+    let runs = json["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 3, "the ggx baseline is not added twice");
+    for run in runs {
+        let ms = |k: &str| run[k].as_f64().unwrap();
+        assert!(ms("min_ms") <= ms("median_ms") && ms("median_ms") <= ms("max_ms"));
+        assert!(ms("min_ms") <= ms("mean_ms") && ms("mean_ms") <= ms("max_ms"));
+        assert_eq!(run["frames"], 3);
+        assert!(run["fragment_invocations"].as_u64().unwrap() > 0);
+        assert!(run.get("instructions").is_some() && run.get("executable_stats").is_some());
+        if run["variant"].as_str().unwrap().starts_with("model=ggx") {
+            assert_eq!(run["ratio_to_baseline"].as_f64().unwrap(), 1.0);
+        }
+    }
+    let csv = std::fs::read_to_string(dir.join("b/results.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), runs.len());
+    for (row, run) in rows.iter().zip(runs) {
+        assert!(row.starts_with(&format!("\"{}\"", run["variant"].as_str().unwrap())));
+    }
+}

@@ -1,0 +1,4 @@
+//! Measuring variants: the bench runner, its statistics and its result files.
+
+pub mod bench;
+pub mod stats;
