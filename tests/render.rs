@@ -2,26 +2,10 @@
 
 mod common;
 
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 use lamina::render::Renderer;
 use lamina::shader::VariantKey;
 use lamina::tables::environment::{self, EnvDesc};
-
-/// World-space view ray through the centre of pixel (x, y), as the sky shader reconstructs it.
-fn view_ray(renderer: &Renderer, x: u32, y: u32, width: u32, height: u32) -> Vec3 {
-    let inv = renderer
-        .camera
-        .view_proj(width as f32 / height as f32)
-        .inverse();
-    let ndc = Vec4::new(
-        2.0 * (x as f32 + 0.5) / width as f32 - 1.0,
-        2.0 * (y as f32 + 0.5) / height as f32 - 1.0,
-        1.0,
-        1.0,
-    );
-    let far = inv * ndc;
-    (far.truncate() / far.w - renderer.camera.eye).normalize()
-}
 
 /// Distance from the origin (the unit sphere's centre) to the ray's line.
 fn miss_distance(eye: Vec3, dir: Vec3) -> f32 {
@@ -51,7 +35,7 @@ fn default_render_is_finite_sphere_differs_and_sky_matches_environment() {
     let (mut sphere_pixels, mut sphere_differs) = (0usize, 0usize);
     for y in 0..h {
         for x in 0..w {
-            let dir = view_ray(&renderer, x, y, w, h);
+            let dir = renderer.camera.ray(x, y, w, h);
             let d = glam::DVec3::new(dir.x as f64, dir.y as f64, dir.z as f64);
             let (u, v) = environment::equirect_uv(d);
             let background = environment::sample_bilinear(&studio, u, v).value;

@@ -5,7 +5,7 @@
 //! pixels by the cosine between normal and view (computed on the CPU from the camera and the
 //! sphere); the CPU side evaluates the model's total reflectance at the bins' centres.
 
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 use half::f16;
 
 use crate::error::Result;
@@ -60,19 +60,11 @@ pub fn gpu(
     let frame = renderer.render(&pass, layers, size, size)?;
 
     let camera = renderer.camera;
-    let inverse = camera.view_proj(1.0).inverse();
     // Per bin: radiance sums, cosine sum, pixel count.
     let mut sums = vec![([0.0f64; 3], 0.0f64, 0usize); bin_count];
     for y in 0..size {
         for x in 0..size {
-            let ndc = Vec4::new(
-                2.0 * (x as f32 + 0.5) / size as f32 - 1.0,
-                2.0 * (y as f32 + 0.5) / size as f32 - 1.0,
-                1.0,
-                1.0,
-            );
-            let far = inverse * ndc;
-            let dir = (far.truncate() / far.w - camera.eye).normalize();
+            let dir = camera.ray(x, y, size, size);
             let Some(cos_theta) = sphere_cosine(camera.eye, dir) else {
                 continue;
             };

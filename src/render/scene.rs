@@ -28,6 +28,20 @@ impl Camera {
         let proj = proj::vulkan::perspective(self.fov_y_degrees.to_radians(), aspect, 0.05, 100.0);
         proj * view::look_at_mat4(self.eye, self.target, Vec3::Y)
     }
+
+    /// World-space unit direction through the centre of pixel (x, y) of a `width`×`height`
+    /// frame, as the sky shader reconstructs its view rays.
+    pub fn ray(&self, x: u32, y: u32, width: u32, height: u32) -> Vec3 {
+        let inverse = self.view_proj(width as f32 / height as f32).inverse();
+        let ndc = glam::Vec4::new(
+            2.0 * (x as f32 + 0.5) / width as f32 - 1.0,
+            2.0 * (y as f32 + 0.5) / height as f32 - 1.0,
+            1.0,
+            1.0,
+        );
+        let far = inverse * ndc;
+        (far.truncate() / far.w - self.eye).normalize()
+    }
 }
 
 /// Interleaved position + normal, 24 bytes.
