@@ -13,12 +13,38 @@
 //! roughness = 0.3
 //! ```
 //! 6-flux layers add the medium that fills them: `depth`, `sigma_s`, `sigma_a` (RGB) and `g`.
-//! Every error names the file, the layer and the field, and the allowed range.
+//! A stack holds [`LayerParams`] directly: the artist form is converted to (η, κ) on load, and
+//! [`Stack::to_toml`] writes the physical form back.
+//!
+//! Every error names the file, the layer (1-based, top first) and the field, and the allowed
+//! range. The ranges, and why:
+//!
+//! | field | range | why |
+//! |---|---|---|
+//! | `ior` | (0, 400] | η ≤ 0 is unphysical and conductors go below 1 (gold's red η is 0.14). Measured RGB values stay below 5, but the artist form reaches η ≈ 398 (f0 = 0.99, edge tint 0), and the physical form must load whatever [`Stack::to_toml`] writes |
+//! | `kappa` | [0, 200] | likewise: measured κ stays below 10 (aluminium 9.2), the artist form reaches κ ≈ 199; the bound keeps κ⁴ in the GPU's f32 conductor Fresnel far from overflow |
+//! | `roughness` | [0, 1] | GGX α; 0 is a mirror, and the FGD/TIR tables span α ∈ [0, 1] |
+//! | `f0` | [0, 0.99] | as r → 1 Gulbrandsen's η and κ go to infinity; the most reflective RGB metal, silver, has F0 ≈ 0.975 |
+//! | `edge_tint` | [0, 1] | a reflectance-like colour; every value gives (η, κ) inside the rows above |
+//! | `depth` | [0, 100] | only τ = depth·σ matters and τ ≳ 45 is opaque (tm6 clamps there); larger values are unit slips |
+//! | `sigma_s`, `sigma_a` | [0, 1000] | the same reasoning; coefficients, so non-negative |
+//! | `g` | (−1, 1) | HG asymmetry; ±1 is the degenerate limit (a delta, not a phase function) |
+//!
+//! Structural rules: a layer gives exactly one of the physical (`ior`, optional `kappa`) or the
+//! artist (`f0` and `edge_tint`) form, and always `roughness`; a conductor (any κ > 0) is the
+//! last layer and has no medium; medium fields need `model = "tm6"`, and `sigma_s`/`sigma_a` need
+//! a `depth`; a stack has 1 to [`MAX_LAYERS_LIMIT`] layers (the GPU buffer's size), and
+//! [`Stack::check_fits`] tests it against a variant's static array size.
+//!
+//! [`MAX_LAYERS_LIMIT`]: crate::shader::variant::MAX_LAYERS_LIMIT
 
 mod artist;
+mod layer;
 mod parse;
+mod presets;
 #[cfg(test)]
 mod tests;
+mod write;
 
 use std::path::{Path, PathBuf};
 
@@ -26,19 +52,28 @@ use crate::model::LayerParams;
 use crate::shader::Model;
 
 pub use artist::gulbrandsen;
+pub use presets::presets;
 
 /// A named stack of layers, top first, with the model it is meant for.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Stack {
+    /// Display name (`name` in the file; the file stem when absent).
     pub name: String,
+    /// `tm2` or `tm6`.
     pub model: Model,
+    /// Top first; only the last may be a conductor.
     pub layers: Vec<LayerParams>,
+    /// The file the stack was read from, named by later errors ([`Stack::check_fits`]).
+    pub source: PathBuf,
 }
 
+/// A material that cannot be read or used, located as precisely as the problem allows.
 #[derive(Debug, thiserror::Error)]
 pub enum MaterialError {
+    /// The file as a whole: unreadable, not TOML, or a top-level key is wrong.
     #[error("{path}: {message}")]
     File { path: PathBuf, message: String },
+    /// One field of one layer (1-based, top first).
     #[error("{path}: layer {layer}: `{field}`: {message}")]
     Field {
         path: PathBuf,
@@ -46,71 +81,33 @@ pub enum MaterialError {
         field: String,
         message: String,
     },
-    #[error("no material `{name}`: not a file, and no preset {name}.toml under {searched}")]
+    /// A preset name that names no file.
+    #[error("no material `{name}`: no preset {name}.toml under {searched} (give a path, e.g. ./{name}, for a file)")]
     NotFound { name: String, searched: String },
-    #[error(
-        "`{name}` has {layers} layers; variant max_layers={max_layers} holds at most {max_layers}"
-    )]
+    /// The stack is deeper than the static layer array of the chosen variant.
+    #[error("{path}: layer {layer}: `max_layers`: `{name}` has {layers} layers; variant max_layers={max_layers} holds at most {max_layers}")]
     TooManyLayers {
+        path: PathBuf,
         name: String,
+        layer: usize,
         layers: usize,
         max_layers: u32,
     },
 }
 
-/// Where presets live, relative to the working directory or to the source tree.
-const PRESET_DIR: &str = "assets/materials";
-
-fn preset_dirs() -> [PathBuf; 2] {
-    [
-        PathBuf::from(PRESET_DIR),
-        Path::new(env!("CARGO_MANIFEST_DIR")).join(PRESET_DIR),
-    ]
-}
-
-/// Preset files, sorted by name (from the first preset directory that exists).
-pub fn presets() -> Vec<PathBuf> {
-    let Some(dir) = preset_dirs().into_iter().find(|d| d.is_dir()) else {
-        return Vec::new();
-    };
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .map(|entries| {
-            entries
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|x| x == "toml"))
-                .collect()
-        })
-        .unwrap_or_default();
-    files.sort();
-    files
-}
-
 impl Stack {
-    /// Loads a material file, or a preset by name (`gold` → `assets/materials/gold.toml`).
+    /// Loads a preset by name (no path separator, no `.toml`: `gold` →
+    /// `assets/materials/gold.toml`, under the working directory, then under the source tree),
+    /// or else a material file by path.
     pub fn resolve(spec: &str) -> Result<Self, MaterialError> {
-        let path = Path::new(spec);
-        if path.is_file() {
-            return Self::load(path);
+        if presets::is_preset_name(spec) {
+            Self::load(&presets::find(spec)?)
+        } else {
+            Self::load(Path::new(spec))
         }
-        let is_name = !spec.contains(['/', '\\']) && !spec.ends_with(".toml");
-        if is_name {
-            for dir in preset_dirs() {
-                let candidate = dir.join(format!("{spec}.toml"));
-                if candidate.is_file() {
-                    return Self::load(&candidate);
-                }
-            }
-        }
-        Err(MaterialError::NotFound {
-            name: spec.to_owned(),
-            searched: preset_dirs()
-                .iter()
-                .map(|d| d.display().to_string())
-                .collect::<Vec<_>>()
-                .join(" and "),
-        })
     }
 
+    /// Reads and validates a material file.
     pub fn load(path: &Path) -> Result<Self, MaterialError> {
         let text = std::fs::read_to_string(path).map_err(|e| MaterialError::File {
             path: path.to_owned(),
@@ -119,14 +116,22 @@ impl Stack {
         parse::parse(&text, path)
     }
 
-    /// Parses TOML text; `path` only names the source in errors.
+    /// Parses and validates TOML text; `path` names the source in errors.
     pub fn from_toml(text: &str, path: &Path) -> Result<Self, MaterialError> {
         parse::parse(text, path)
     }
 
     /// The stack in the physical form of the file format; loads back to an equal stack.
     pub fn to_toml(&self) -> String {
-        parse::write(self)
+        write::write(self)
+    }
+
+    /// Writes [`Stack::to_toml`] to `path` atomically (a temporary file, then a rename).
+    pub fn save(&self, path: &Path) -> crate::error::Result<()> {
+        let text = self.to_toml();
+        crate::imageio::write_atomically(path, |temp| {
+            std::fs::write(temp, &text).map_err(|e| e.to_string())
+        })
     }
 
     /// The layers as the model consumes them.
@@ -134,11 +139,14 @@ impl Stack {
         self.layers.clone()
     }
 
-    /// Errs when the stack has more layers than a variant's static array size.
+    /// Errs when the stack has more layers than a variant's static array size, naming the
+    /// first layer that does not fit.
     pub fn check_fits(&self, max_layers: u32) -> Result<(), MaterialError> {
         if self.layers.len() > max_layers as usize {
             return Err(MaterialError::TooManyLayers {
+                path: self.source.clone(),
                 name: self.name.clone(),
+                layer: max_layers as usize + 1,
                 layers: self.layers.len(),
                 max_layers,
             });

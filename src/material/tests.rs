@@ -1,5 +1,5 @@
-//! One test per error class, each checking the message names file, layer and field; presets;
-//! the TOML round trip.
+//! One test per error class, each checking that the message names the file, the layer and the
+//! field; preset resolution; every preset; the TOML round trip.
 
 use std::path::Path;
 
@@ -8,10 +8,18 @@ use crate::shader::Model;
 
 const FILE: &str = "bad/material.toml";
 
+const GOLD: &str = "ior = [0.143, 0.374, 1.442]\nkappa = [3.983, 2.385, 1.603]\nroughness = 0.3\n";
+const COAT: &str = "ior = [1.5, 1.5, 1.5]\nroughness = 0.1\n";
+
 fn error(text: &str) -> String {
     Stack::from_toml(text, Path::new(FILE))
         .unwrap_err()
         .to_string()
+}
+
+/// A coat (layer 1, with `extra` lines) over gold (layer 2).
+fn coat_over_gold(model: &str, extra: &str) -> String {
+    format!("model = \"{model}\"\n[[layer]]\n{COAT}{extra}\n[[layer]]\n{GOLD}")
 }
 
 fn assert_names(message: &str, parts: &[&str]) {
@@ -21,99 +29,253 @@ fn assert_names(message: &str, parts: &[&str]) {
     }
 }
 
-const GOLD: &str = "ior = [0.143, 0.374, 1.442]\nkappa = [3.983, 2.385, 1.603]\nroughness = 0.3\n";
-
 #[test]
 fn unknown_layer_key() {
-    let m = error(&format!("[[layer]]\n{GOLD}roughnes = 0.2\n"));
-    assert_names(&m, &["layer 1", "`roughnes`", "unknown key", "roughness"]);
+    let m = error(&format!(
+        "[[layer]]\n{COAT}\n[[layer]]\n{GOLD}roughnes = 0.2\n"
+    ));
+    assert_names(&m, &["layer 2", "`roughnes`", "unknown key", "roughness"]);
 }
 
 #[test]
 fn unknown_top_level_key() {
     let m = error(&format!("colour = 1\n[[layer]]\n{GOLD}"));
-    assert_names(&m, &["`colour`", "unknown key"]);
+    assert_names(&m, &["`colour`", "unknown key", "name, model, layer"]);
 }
 
 #[test]
 fn wrong_array_length() {
-    let m = error("[[layer]]\nior = [1.5, 1.5]\nroughness = 0.1\n");
-    assert_names(&m, &["layer 1", "`ior`", "3 numbers", "found 2"]);
+    let m = error(&coat_over_gold("tm2", "").replace("[0.143, 0.374, 1.442]", "[0.143, 0.374]"));
+    assert_names(&m, &["layer 2", "`ior`", "3 numbers", "found 2"]);
+    let m = error(&coat_over_gold("tm6", "depth = 1.0\nsigma_a = 0.5"));
+    assert_names(&m, &["layer 1", "`sigma_a`", "array of 3 numbers", "float"]);
+}
+
+#[test]
+fn wrong_type() {
+    let m = error(&coat_over_gold("tm2", "").replace("roughness = 0.1", "roughness = \"0.1\""));
+    assert_names(
+        &m,
+        &["layer 1", "`roughness`", "expected a number", "string"],
+    );
 }
 
 #[test]
 fn non_finite_value() {
-    let m = error(&format!(
-        "[[layer]]\nior = [1.5, nan, 1.5]\nroughness = 0.1\n[[layer]]\n{GOLD}"
-    ));
-    assert_names(&m, &["layer 1", "`ior`", "not finite"]);
+    let m = error(&coat_over_gold("tm2", "").replace("[1.5, 1.5, 1.5]", "[1.5, nan, 1.5]"));
+    assert_names(
+        &m,
+        &["layer 1", "`ior`", "G: NaN is not finite", "(0, 400]"],
+    );
+    let m = error(&coat_over_gold("tm6", "depth = inf"));
+    assert_names(&m, &["layer 1", "`depth`", "not finite", "[0, 100]"]);
 }
 
 #[test]
 fn out_of_range_value() {
+    let cases = [
+        (
+            "roughness = 0.1",
+            "roughness = 1.5",
+            "`roughness`",
+            "[0, 1]",
+        ),
+        ("[1.5, 1.5, 1.5]", "[1.5, 0, 1.5]", "`ior`", "(0, 400]"),
+        (
+            "roughness = 0.1",
+            "roughness = 0.1\ng = 1.0\ndepth = 1",
+            "`g`",
+            "(-1, 1)",
+        ),
+    ];
+    for (from, to, field, range) in cases {
+        let m = error(&coat_over_gold("tm6", "").replace(from, to));
+        assert_names(&m, &["layer 1", field, "out of range", range]);
+    }
+    let m = error(&coat_over_gold("tm2", "").replace("kappa = [3.983", "kappa = [-3.983"));
+    assert_names(&m, &["layer 2", "`kappa`", "R: -3.983", "[0, 200]"]);
+}
+
+#[test]
+fn artist_form_out_of_range() {
+    let m =
+        error("[[layer]]\nf0 = [0.9, 0.995, 0.9]\nedge_tint = [0.9, 0.9, 0.9]\nroughness = 0.2\n");
+    assert_names(&m, &["layer 1", "`f0`", "G: 0.995", "[0, 0.99]"]);
+    let m =
+        error("[[layer]]\nf0 = [0.9, 0.9, 0.9]\nedge_tint = [0.9, 1.1, 0.9]\nroughness = 0.2\n");
+    assert_names(&m, &["layer 1", "`edge_tint`", "G: 1.1", "[0, 1]"]);
+}
+
+/// The corners of the artist domain convert into the physical ranges, so what `to_toml`
+/// writes for them loads back.
+#[test]
+fn artist_domain_fits_the_physical_ranges() {
+    for (r, g) in [
+        (0.99, 0.0),
+        (0.99, 0.5),
+        (0.99, 1.0),
+        (0.0, 0.0),
+        (0.0, 1.0),
+    ] {
+        let (f0, tint) = (
+            format!("[{r:?}, {r:?}, {r:?}]"),
+            format!("[{g:?}, {g:?}, {g:?}]"),
+        );
+        let text = format!("[[layer]]\nf0 = {f0}\nedge_tint = {tint}\nroughness = 0.2\n");
+        let stack = Stack::from_toml(&text, Path::new(FILE)).unwrap_or_else(|e| panic!("{e}"));
+        let back = Stack::from_toml(&stack.to_toml(), Path::new(FILE)).unwrap();
+        assert_eq!(back, stack);
+    }
+}
+
+#[test]
+fn both_interface_forms() {
     let m = error(&format!(
-        "[[layer]]\nior = [1.5, 1.5, 1.5]\nroughness = 1.5\n[[layer]]\n{GOLD}"
+        "[[layer]]\n{GOLD}f0 = [0.5, 0.5, 0.5]\nedge_tint = [0.5, 0.5, 0.5]\n"
     ));
-    assert_names(&m, &["layer 1", "`roughness`", "1.5", "[0, 1]"]);
-    let m = error(&format!("[[layer]]\n{GOLD}\n").replace("kappa = [3.983", "kappa = [-3.983"));
-    assert_names(&m, &["layer 1", "`kappa`", "[0, 20]"]);
+    assert_names(&m, &["layer 1", "`f0`", "not both"]);
+}
+
+#[test]
+fn neither_interface_form() {
+    let m = error(&format!("[[layer]]\nroughness = 0.1\n[[layer]]\n{GOLD}"));
+    assert_names(&m, &["layer 1", "`ior`", "missing"]);
+}
+
+#[test]
+fn half_an_interface_form() {
+    let m = error("[[layer]]\nkappa = [1.0, 1.0, 1.0]\nroughness = 0.1\n");
+    assert_names(&m, &["layer 1", "`ior`", "missing"]);
+    let m = error("[[layer]]\nf0 = [0.9, 0.9, 0.9]\nroughness = 0.1\n");
+    assert_names(&m, &["layer 1", "`edge_tint`", "missing"]);
+}
+
+#[test]
+fn missing_roughness() {
+    let m = error(&coat_over_gold("tm2", "").replace("roughness = 0.1\n", ""));
+    assert_names(&m, &["layer 1", "`roughness`", "missing", "[0, 1]"]);
 }
 
 #[test]
 fn conductor_above_another_layer() {
     let m = error(&format!(
-        "[[layer]]\n{GOLD}[[layer]]\nior = [1.5, 1.5, 1.5]\nroughness = 0.1\n"
+        "[[layer]]\n{COAT}[[layer]]\n{GOLD}[[layer]]\n{COAT}"
     ));
-    assert_names(&m, &["layer 1", "`kappa`", "must be the last layer"]);
+    assert_names(&m, &["layer 2", "`kappa`", "must be the last layer"]);
+    let artist = "f0 = [0.9, 0.9, 0.9]\nedge_tint = [0.9, 0.9, 0.9]\nroughness = 0.2\n";
+    let m = error(&format!("[[layer]]\n{artist}[[layer]]\n{COAT}"));
+    assert_names(&m, &["layer 1", "`f0`", "must be the last layer"]);
+}
+
+#[test]
+fn conductor_with_a_medium() {
+    let m = error(&format!(
+        "model = \"tm6\"\n[[layer]]\n{COAT}[[layer]]\n{GOLD}depth = 1.0\n"
+    ));
+    assert_names(&m, &["layer 2", "`depth`", "no medium"]);
+}
+
+#[test]
+fn medium_without_depth() {
+    let m = error(&coat_over_gold("tm6", "sigma_s = [1.0, 1.0, 1.0]"));
+    assert_names(&m, &["layer 1", "`depth`", "missing", "sigma_s"]);
 }
 
 #[test]
 fn medium_fields_need_tm6() {
-    let m = error(&format!("model = \"tm2\"\n[[layer]]\nior = [1.5, 1.5, 1.5]\nroughness = 0.1\ndepth = 1.0\n[[layer]]\n{GOLD}"));
+    let m = error(&coat_over_gold("tm2", "depth = 1.0"));
     assert_names(&m, &["layer 1", "`depth`", "tm6"]);
 }
 
 #[test]
-fn both_or_neither_interface_form() {
-    let m = error(&format!(
-        "[[layer]]\n{GOLD}f0 = [0.5, 0.5, 0.5]\nedge_tint = [0.5, 0.5, 0.5]\n"
-    ));
-    assert_names(&m, &["layer 1", "not both"]);
-    let m = error("[[layer]]\nroughness = 0.1\n");
-    assert_names(&m, &["layer 1", "`ior`", "missing"]);
+fn empty_stack() {
+    assert_names(&error("name = \"x\"\n"), &["`layer`", "at least one"]);
+    assert_names(
+        &error(&format!("[layer]\n{GOLD}")),
+        &["`layer`", "[[layer]]"],
+    );
 }
 
 #[test]
-fn empty_stack_and_bad_model() {
-    assert_names(&error("name = \"x\"\n"), &["`layer`", "at least one"]);
+fn unknown_model() {
     let m = error(&format!("model = \"tm4\"\n[[layer]]\n{GOLD}"));
     assert_names(&m, &["`model`", "tm4", "tm2", "tm6"]);
 }
 
 #[test]
+fn syntax_error_names_the_line() {
+    let m = error(&format!("[[layer]]\n{COAT}roughness = = 2\n"));
+    assert_names(&m, &["line 4", "not valid TOML"]);
+}
+
+#[test]
 fn too_many_layers_for_the_variant() {
-    let stack = Stack::resolve("five-layers").unwrap();
+    let text = format!(
+        "{}[[layer]]\n{GOLD}",
+        format!("[[layer]]\n{COAT}").repeat(4)
+    );
+    let stack = Stack::from_toml(&text, Path::new(FILE)).unwrap();
     let m = stack.check_fits(4).unwrap_err().to_string();
-    assert!(m.contains("5 layers") && m.contains("max_layers=4"), "{m}");
+    assert_names(&m, &["layer 5", "`max_layers`", "5 layers", "max_layers=4"]);
     stack.check_fits(5).unwrap();
 }
 
 #[test]
-fn unknown_preset_is_named() {
+fn too_many_layers_for_the_buffer() {
+    let m = error(&format!("[[layer]]\n{COAT}").repeat(17));
+    assert_names(&m, &["layer 17", "`layer`", "at most 16"]);
+}
+
+#[test]
+fn preset_names_and_paths_resolve() {
+    let gold = Stack::resolve("gold").unwrap();
+    assert!(gold.source.ends_with("assets/materials/gold.toml"));
+    let by_path = Stack::resolve(gold.source.to_str().unwrap()).unwrap();
+    assert_eq!(by_path, gold);
     let m = Stack::resolve("unobtainium").unwrap_err().to_string();
     assert!(
         m.contains("unobtainium") && m.contains("assets/materials"),
         "{m}"
     );
+    let m = Stack::resolve("unobtainium.toml").unwrap_err().to_string();
+    assert!(m.starts_with("unobtainium.toml: "), "{m}");
 }
 
 #[test]
 fn artist_form_converts_to_physical() {
     let text = "[[layer]]\nf0 = [0.04, 0.5, 0.9]\nedge_tint = [0.0, 0.5, 0.9]\nroughness = 0.2\n";
+    let l = Stack::from_toml(text, Path::new(FILE)).unwrap().layers[0];
+    let want = [(1.5, 0.0), (3.08088, 2.82727), (3.84474, 11.41569)];
+    for (c, (n, k)) in want.into_iter().enumerate() {
+        assert!(
+            (l.ior[c] - n).abs() < 1e-4 && (l.kappa[c] - k).abs() < 1e-4,
+            "{l:?}"
+        );
+    }
+}
+
+#[test]
+fn round_trip_is_exact() {
+    let text = "name = \"a \\\"quoted\\\" name\"\nmodel = \"tm6\"\n[[layer]]\n\
+                ior = [1.1, 1.3000000000000003, 1.7]\nroughness = 0.30000000000000004\n\
+                depth = 0.1\nsigma_s = [1e-7, 2.5, 3]\nsigma_a = [0.1, 0.2, 0.3]\ng = -0.3\n\
+                [[layer]]\nf0 = [0.9, 0.6, 0.3]\nedge_tint = [0.7, 0.5, 0.3]\nroughness = 0.2\n";
     let stack = Stack::from_toml(text, Path::new(FILE)).unwrap();
-    let l = stack.layers[0];
-    assert!((l.ior[0] - 1.5).abs() < 1e-9 && l.kappa[0].abs() < 1e-9);
-    assert!((l.ior[1] - 3.08088).abs() < 1e-4 && (l.kappa[1] - 2.82727).abs() < 1e-4);
+    let back = Stack::from_toml(&stack.to_toml(), Path::new(FILE)).unwrap();
+    assert_eq!(back, stack);
+    assert_eq!(back.to_toml(), stack.to_toml());
+}
+
+#[test]
+fn save_writes_a_file_that_loads_back() {
+    let dir = std::env::temp_dir().join(format!("lamina-material-{}", std::process::id()));
+    let path = dir.join("saved.toml");
+    let stack = Stack::resolve("dusty-varnish").unwrap();
+    stack.save(&path).unwrap();
+    let back = Stack::load(&path).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(back.layers, stack.layers);
+    assert_eq!((back.name, back.model), (stack.name, stack.model));
 }
 
 #[test]
@@ -128,4 +290,12 @@ fn every_preset_loads_and_round_trips() {
         models.push(stack.model);
     }
     assert!(models.contains(&Model::Tm6) && models.contains(&Model::Tm2));
+}
+
+#[test]
+fn aluminium_is_the_ggx_baseline_material() {
+    let stack = Stack::resolve("aluminium").unwrap();
+    assert_eq!(stack.model, Model::Tm2);
+    assert_eq!(stack.layers.len(), 1);
+    assert!(stack.layers[0].is_conductor());
 }

@@ -1,0 +1,260 @@
+//! Validation of one `[[layer]]` table into [`LayerParams`]: keys, types, lengths, ranges (the
+//! table in the module docs), the interface form and the medium rules.
+
+use std::ops::RangeInclusive;
+use std::path::Path;
+
+use toml::{Table, Value};
+
+use super::artist::gulbrandsen;
+use super::MaterialError;
+use crate::model::LayerParams;
+use crate::shader::Model;
+
+const LAYER_KEYS: &[&str] = &[
+    "ior",
+    "kappa",
+    "f0",
+    "edge_tint",
+    "roughness",
+    "depth",
+    "sigma_s",
+    "sigma_a",
+    "g",
+];
+const MEDIUM_KEYS: &[&str] = &["depth", "sigma_s", "sigma_a", "g"];
+const CHANNELS: [&str; 3] = ["R", "G", "B"];
+
+/// An allowed range, inclusive unless `open_low`/`open_high` exclude an end.
+struct Range {
+    span: RangeInclusive<f64>,
+    open_low: bool,
+    open_high: bool,
+    text: &'static str,
+}
+
+impl Range {
+    const fn closed(low: f64, high: f64, text: &'static str) -> Self {
+        Self {
+            span: low..=high,
+            open_low: false,
+            open_high: false,
+            text,
+        }
+    }
+
+    fn contains(&self, v: f64) -> bool {
+        self.span.contains(&v)
+            && !(self.open_low && v == *self.span.start())
+            && !(self.open_high && v == *self.span.end())
+    }
+}
+
+const IOR: Range = Range {
+    open_low: true,
+    ..Range::closed(0.0, 400.0, "(0, 400]")
+};
+const KAPPA: Range = Range::closed(0.0, 200.0, "[0, 200]");
+const UNIT: Range = Range::closed(0.0, 1.0, "[0, 1]");
+const F0: Range = Range::closed(0.0, 0.99, "[0, 0.99]");
+const DEPTH: Range = Range::closed(0.0, 100.0, "[0, 100]");
+const SIGMA: Range = Range::closed(0.0, 1000.0, "[0, 1000]");
+const HG_G: Range = Range {
+    open_low: true,
+    open_high: true,
+    ..Range::closed(-1.0, 1.0, "(-1, 1)")
+};
+
+/// One `[[layer]]` table with what its error messages and rules need.
+pub(super) struct LayerReader<'a> {
+    pub path: &'a Path,
+    /// 0-based; messages print it 1-based.
+    pub index: usize,
+    pub is_last: bool,
+    pub model: Model,
+    pub table: &'a Table,
+}
+
+impl LayerReader<'_> {
+    /// The validated layer.
+    pub fn read(&self) -> Result<LayerParams, MaterialError> {
+        self.check_keys()?;
+        let (ior, kappa) = self.interface()?;
+        let roughness = self.scalar("roughness", &UNIT)?.ok_or_else(|| {
+            self.error(
+                "roughness",
+                "missing; the GGX α of the layer's top interface, in [0, 1]",
+            )
+        })?;
+        let layer = LayerParams {
+            ior,
+            kappa,
+            roughness,
+            depth: self.scalar("depth", &DEPTH)?.unwrap_or(0.0),
+            sigma_s: self.rgb("sigma_s", &SIGMA)?.unwrap_or([0.0; 3]),
+            sigma_a: self.rgb("sigma_a", &SIGMA)?.unwrap_or([0.0; 3]),
+            g: self.scalar("g", &HG_G)?.unwrap_or(0.0),
+        };
+        self.check_conductor_and_medium(&layer)?;
+        Ok(layer)
+    }
+
+    fn error(&self, field: &str, message: impl Into<String>) -> MaterialError {
+        MaterialError::Field {
+            path: self.path.to_owned(),
+            layer: self.index + 1,
+            field: field.to_owned(),
+            message: message.into(),
+        }
+    }
+
+    fn has(&self, field: &str) -> bool {
+        self.table.contains_key(field)
+    }
+
+    /// Unknown keys, and medium keys outside `tm6`.
+    fn check_keys(&self) -> Result<(), MaterialError> {
+        if let Some(key) = self
+            .table
+            .keys()
+            .find(|k| !LAYER_KEYS.contains(&k.as_str()))
+        {
+            let known = LAYER_KEYS.join(", ");
+            return Err(self.error(key, format!("unknown key; layer keys are {known}")));
+        }
+        match MEDIUM_KEYS.iter().find(|k| self.has(k)) {
+            Some(key) if self.model == Model::Tm2 => {
+                Err(self.error(key, "a medium field, allowed only with model = \"tm6\""))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// A conductor ends the stack and holds no medium; a medium needs its depth.
+    fn check_conductor_and_medium(&self, layer: &LayerParams) -> Result<(), MaterialError> {
+        if layer.is_conductor() {
+            let field = if self.has("f0") { "f0" } else { "kappa" };
+            if !self.is_last {
+                return Err(self.error(field, "a conductor (κ > 0) must be the last layer"));
+            }
+            if let Some(key) = MEDIUM_KEYS.iter().find(|k| self.has(k)) {
+                return Err(self.error(key, "a conductor (κ > 0) is opaque and has no medium"));
+            }
+        }
+        match ["sigma_s", "sigma_a"].iter().find(|k| self.has(k)) {
+            Some(key) if !self.has("depth") => Err(self.error(
+                "depth",
+                format!(
+                    "missing: `{key}` needs the medium's depth, in {}",
+                    DEPTH.text
+                ),
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    /// A finite number in `range`; `channel` (R, G or B) locates an element of an RGB array.
+    fn number(
+        &self,
+        field: &str,
+        channel: Option<&str>,
+        value: &Value,
+        range: &Range,
+    ) -> Result<f64, MaterialError> {
+        let at = channel.map(|c| format!("{c}: ")).unwrap_or_default();
+        let v = match value {
+            Value::Float(f) => *f,
+            Value::Integer(i) => *i as f64,
+            other => {
+                let found = other.type_str();
+                return Err(self.error(field, format!("{at}expected a number, found {found}")));
+            }
+        };
+        let allowed = range.text;
+        if !v.is_finite() {
+            return Err(self.error(field, format!("{at}{v} is not finite; allowed {allowed}")));
+        }
+        if !range.contains(v) {
+            let message = format!("{at}{v} is out of range; allowed {allowed}");
+            return Err(self.error(field, message));
+        }
+        Ok(v)
+    }
+
+    fn scalar(&self, field: &str, range: &Range) -> Result<Option<f64>, MaterialError> {
+        self.table
+            .get(field)
+            .map(|v| self.number(field, None, v, range))
+            .transpose()
+    }
+
+    fn rgb(&self, field: &str, range: &Range) -> Result<Option<[f64; 3]>, MaterialError> {
+        let Some(value) = self.table.get(field) else {
+            return Ok(None);
+        };
+        let items = match value {
+            Value::Array(items) if items.len() == 3 => items,
+            Value::Array(items) => {
+                let found = items.len();
+                return Err(self.error(field, format!("expected 3 numbers (RGB), found {found}")));
+            }
+            other => {
+                let found = other.type_str();
+                let message = format!("expected an array of 3 numbers (RGB), found {found}");
+                return Err(self.error(field, message));
+            }
+        };
+        let mut out = [0.0; 3];
+        for ((o, item), channel) in out.iter_mut().zip(items).zip(CHANNELS) {
+            *o = self.number(field, Some(channel), item, range)?;
+        }
+        Ok(Some(out))
+    }
+
+    /// (η, κ) from the physical form, or from the artist form.
+    fn interface(&self) -> Result<([f64; 3], [f64; 3]), MaterialError> {
+        let physical = self.has("ior") || self.has("kappa");
+        let artist = self.has("f0") || self.has("edge_tint");
+        match (physical, artist) {
+            (true, true) => Err(self.error(
+                "f0",
+                "give either ior/kappa (physical) or f0/edge_tint (artist), not both",
+            )),
+            (false, false) => Err(self.error(
+                "ior",
+                "missing; give ior (and kappa for a conductor), or f0 and edge_tint",
+            )),
+            (true, false) => self.physical(),
+            (false, true) => self.artist(),
+        }
+    }
+
+    fn physical(&self) -> Result<([f64; 3], [f64; 3]), MaterialError> {
+        let ior = self.rgb("ior", &IOR)?.ok_or_else(|| {
+            self.error("ior", format!("missing (kappa needs ior), in {}", IOR.text))
+        })?;
+        Ok((ior, self.rgb("kappa", &KAPPA)?.unwrap_or([0.0; 3])))
+    }
+
+    /// Gulbrandsen 2014 per channel (ALGORITHMS.md §10.5). With r ≤ 0.99 the result lies in
+    /// the physical form's ranges: η ≤ (1+√r)/(1−√r) ≈ 398 and κ ≤ √(((1+r)/(1−r))² − 1) ≈ 199.
+    fn artist(&self) -> Result<([f64; 3], [f64; 3]), MaterialError> {
+        let f0 = self.rgb("f0", &F0)?.ok_or_else(|| {
+            self.error(
+                "f0",
+                format!("missing (edge_tint needs f0), in {}", F0.text),
+            )
+        })?;
+        let tint = self.rgb("edge_tint", &UNIT)?.ok_or_else(|| {
+            self.error(
+                "edge_tint",
+                format!("missing (f0 needs edge_tint), in {}", UNIT.text),
+            )
+        })?;
+        let (mut ior, mut kappa) = ([0.0; 3], [0.0; 3]);
+        for c in 0..3 {
+            (ior[c], kappa[c]) = gulbrandsen(f0[c], tint[c]);
+        }
+        Ok((ior, kappa))
+    }
+}
