@@ -7,12 +7,16 @@ use std::str::FromStr;
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
+use indicatif::{ProgressBar, ProgressStyle};
 use lamina::imageio;
 use lamina::material::Stack;
 use lamina::model::fgd::ExactFgd;
 use lamina::model::{tm2, tm6, Evaluation, LayerParams, NoTir};
 use lamina::output::{EvalReport, EvalSample};
-use lamina::profile::bench::{self, BenchConfig};
+use lamina::profile::bench::{self, BenchConfig, Case};
+use lamina::profile::sweep::{self, CounterSetup};
+use lamina::profile::{counter, report};
+use lamina::render::forward::check_available;
 use lamina::render::Renderer;
 use lamina::render::{eval::GpuEvaluator, furnace, sheet};
 use lamina::shader::Model;
@@ -55,6 +59,60 @@ enum Command {
     Sheet(SheetArgs),
     /// Time variants of the shaded draw, interleaved, against the ggx baseline.
     Bench(BenchArgs),
+    /// Run a sweep file (profiling/sweeps/*.toml): results.json, results.csv and charts per study.
+    Sweep(SweepArgs),
+    /// Write profiling/REPORT.md from sweep results, beside the talk's published figures.
+    Report(ReportArgs),
+    /// Internal: counts instructions of shaded draws; runs under callgrind, started by
+    /// `--counter instructions`.
+    #[command(hide = true)]
+    CountWorker(CountWorkerArgs),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum CounterArg {
+    /// Instructions executed by lavapipe while it runs the shaded draw (valgrind callgrind).
+    Instructions,
+}
+
+#[derive(clap::Args)]
+struct SweepArgs {
+    /// A study or a suite (`studies = [...]`), e.g. profiling/sweeps/reproduce.toml.
+    file: PathBuf,
+    /// Output directory: results of one study go here, a suite's in one sub-directory per study.
+    #[arg(long, value_name = "DIR", default_value = "out/sweep")]
+    out: PathBuf,
+    /// Count instructions too (overrides the sweep file's `counter`).
+    #[arg(long, value_enum)]
+    counter: Option<CounterArg>,
+    /// Equirectangular OpenEXR environment map.
+    #[arg(long, value_name = "FILE", default_value = "assets/env/studio.exr")]
+    env: PathBuf,
+    /// Check and expand the file, print the cases, and stop before any GPU work.
+    #[arg(long)]
+    dry_run: bool,
+}
+
+#[derive(clap::Args)]
+struct ReportArgs {
+    /// Result directories: a study's (holding study.json) or a parent of several.
+    #[arg(default_value = "profiling/results/lavapipe/reproduce")]
+    dirs: Vec<PathBuf>,
+    #[arg(long, value_name = "FILE", default_value = "profiling/REPORT.md")]
+    out: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct CountWorkerArgs {
+    #[arg(long, value_name = "FILE")]
+    job: PathBuf,
+    /// Only build and draw each case once (natively, to fill Mesa's shader cache).
+    #[arg(long)]
+    warm: bool,
+    #[arg(long, value_name = "FILE")]
+    env: PathBuf,
+    #[arg(long, value_name = "WxH")]
+    size: Size,
 }
 
 #[derive(clap::Args)]
@@ -83,6 +141,12 @@ struct BenchArgs {
     /// Write the results as CSV.
     #[arg(long, value_name = "FILE")]
     csv: Option<PathBuf>,
+    /// Also count each variant's instructions under callgrind (lavapipe only).
+    #[arg(long, value_enum)]
+    counter: Option<CounterArg>,
+    /// Resolution of the counted draw (instructions grow with covered pixels).
+    #[arg(long, default_value = "48x48", value_name = "WxH")]
+    counter_size: Size,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -443,32 +507,58 @@ fn run_bench(cli: &Cli, args: &BenchArgs) -> Result<()> {
     let env_path = asset_path(&args.env);
     let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
     let (stack, base) = material_and_variant(&args.material, None)?;
-    let variants = args
+    let cases = args
         .variants
         .iter()
         .map(|k| {
-            let v = VariantKey::parse_over(k, base)?;
-            stack.check_fits(v.max_layers)?;
-            Ok(v)
+            let variant = VariantKey::parse_over(k, base)?;
+            stack.check_fits(variant.max_layers)?;
+            check_available(&variant)?;
+            Ok(Case {
+                variant,
+                stack: stack.clone(),
+            })
         })
         .collect::<Result<Vec<_>>>()?;
     let gpu = open_gpu(cli)?;
     let config = BenchConfig {
-        variants,
-        material: stack.name.clone(),
-        layers: stack.params(),
+        cases,
         width: args.size.width,
         height: args.size.height,
         frames: args.frames,
         warmup: args.warmup,
     };
-    let results = bench::run(&gpu, &equirect, &config, |done, total| {
-        eprint!("\rframe {done}/{total}");
-        if done == total {
-            eprintln!();
-        }
+    let bar = progress_bar("frames");
+    let mut results = bench::run(&gpu, &equirect, &config, |done, total| {
+        bar.set_length(u64::from(total));
+        bar.set_position(u64::from(done));
     })?;
+    bar.finish_and_clear();
     check_validation(&gpu)?;
+    if args.counter.is_some() {
+        let setup = counter_setup(&gpu, &env_path)?;
+        let all = config.with_baselines();
+        let bar = progress_bar("counted (callgrind)");
+        let counts = counter::count_instructions(
+            &counter::CountRequest {
+                exe: &setup.exe,
+                global_args: setup.global_args.clone(),
+                env_map: &setup.env_map,
+                cases: &all,
+                width: args.counter_size.width,
+                height: args.counter_size.height,
+            },
+            |done, total| {
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            },
+        )?;
+        bar.finish_and_clear();
+        for (run, n) in results.runs.iter_mut().zip(counts) {
+            run.instructions = Some(n.jit);
+            run.instructions_total = Some(n.total);
+        }
+    }
     print!("{}", results.table());
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&results)?;
@@ -485,6 +575,197 @@ fn run_bench(cli: &Cli, args: &BenchArgs) -> Result<()> {
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// A progress bar on stderr (hidden when stderr is not a terminal).
+fn progress_bar(what: &str) -> ProgressBar {
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template("{prefix:>28} [{bar:30}] {pos}/{len} {msg} ({elapsed})")
+            .expect("a valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_prefix(what.to_owned());
+    bar
+}
+
+/// How the parent starts `lamina count-worker` under callgrind: this executable, the same
+/// device, the same environment map. Refused off lavapipe: the counter counts CPU
+/// instructions, which measure a shader only where the CPU runs it.
+fn counter_setup(gpu: &Gpu, env_map: &Path) -> Result<CounterSetup> {
+    let report = &gpu.device.report;
+    if report.device_type != "cpu" {
+        anyhow::bail!(
+            "--counter instructions counts the CPU instructions lavapipe executes; the selected \
+             device `{}` is a {} GPU (choose lavapipe with --device llvmpipe, or drop the counter)",
+            report.name,
+            report.device_type
+        );
+    }
+    // The worker runs without the validation layer even when this run has it: the layer's
+    // hooks on the counted submission would be counted too. Its Vulkan work is the same as
+    // the (validated) timing run's.
+    let global_args = vec!["--device".to_string(), report.name.clone()];
+    Ok(CounterSetup {
+        exe: std::env::current_exe().context("locating the lamina executable")?,
+        global_args,
+        env_map: env_map.to_owned(),
+    })
+}
+
+fn run_sweep(cli: &Cli, args: &SweepArgs) -> Result<()> {
+    let (mut studies, suite) = sweep::load(&args.file)?;
+    if let Some(CounterArg::Instructions) = args.counter {
+        for s in &mut studies {
+            s.counter.get_or_insert((48, 48));
+        }
+    }
+    let dir_of = |s: &sweep::Study| {
+        if suite {
+            args.out.join(&s.name)
+        } else {
+            args.out.clone()
+        }
+    };
+    let cases: usize = studies.iter().map(|s| s.points.len()).sum();
+    println!(
+        "{}: {} stud{}, {cases} case(s) (+ ggx baselines)",
+        args.file.display(),
+        studies.len(),
+        if studies.len() == 1 { "y" } else { "ies" }
+    );
+    for s in &studies {
+        println!(
+            "  {:<22} {:>3} case(s) at {}x{}, {}+{} frames{}{}  -> {}",
+            s.name,
+            s.points.len(),
+            s.width,
+            s.height,
+            s.warmup,
+            s.frames,
+            s.counter
+                .map(|(w, h)| format!(", instructions at {w}x{h}"))
+                .unwrap_or_default(),
+            if s.skipped.is_empty() {
+                String::new()
+            } else {
+                format!(", {} skipped (stack > max_layers)", s.skipped.len())
+            },
+            dir_of(s).display()
+        );
+    }
+    if args.dry_run {
+        for s in &studies {
+            println!("{}:", s.name);
+            for p in &s.points {
+                println!("  {} | {}", p.case.variant, p.case.stack.name);
+            }
+        }
+        return Ok(());
+    }
+    let env_path = asset_path(&args.env);
+    let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
+    let gpu = open_gpu(cli)?;
+    let setup = if studies.iter().any(|s| s.counter.is_some()) {
+        Some(counter_setup(&gpu, &env_path)?)
+    } else {
+        None
+    };
+    let started = std::time::Instant::now();
+    let mut written = Vec::new();
+    for (k, study) in studies.iter().enumerate() {
+        let bar = progress_bar(&format!("[{}/{}] {}", k + 1, studies.len(), study.name));
+        let (results, meta) = sweep::run(
+            &gpu,
+            &equirect,
+            study,
+            setup.as_ref(),
+            |what, done, total| {
+                bar.set_message(what.to_owned());
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            },
+        )?;
+        bar.finish_and_clear();
+        check_validation(&gpu)?;
+        let dir = dir_of(study);
+        let charts = sweep::write(&dir, study, &results, &meta)?;
+        println!("\n== {} ({})", study.title, study.name);
+        print!("{}", results.table());
+        println!(
+            "wrote {}/results.json, results.csv, {} chart(s)",
+            dir.display(),
+            charts.len()
+        );
+        written.push(dir);
+    }
+    let studies_read = report::collect(&written)?;
+    let report_path = args.out.join("REPORT.md");
+    let text = report::render(&studies_read, &report_path);
+    imageio::write_atomically(&report_path, |temp| {
+        std::fs::write(temp, &text).map_err(|e| e.to_string())
+    })?;
+    println!(
+        "\n{} stud{} in {:.0} s; report: {}",
+        studies.len(),
+        if studies.len() == 1 { "y" } else { "ies" },
+        started.elapsed().as_secs_f64(),
+        report_path.display()
+    );
+    Ok(())
+}
+
+fn run_report(args: &ReportArgs) -> Result<()> {
+    let studies = report::collect(&args.dirs)?;
+    let text = report::render(&studies, &args.out);
+    imageio::write_atomically(&args.out, |temp| {
+        std::fs::write(temp, &text).map_err(|e| e.to_string())
+    })?;
+    println!(
+        "wrote {} ({} stud{})",
+        args.out.display(),
+        studies.len(),
+        if studies.len() == 1 { "y" } else { "ies" }
+    );
+    Ok(())
+}
+
+fn count_worker(cli: &Cli, args: &CountWorkerArgs) -> Result<()> {
+    let text = std::fs::read_to_string(&args.job)
+        .with_context(|| format!("reading {}", args.job.display()))?;
+    let job: counter::WorkerJob = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not a counter job", args.job.display()))?;
+    let cases = job
+        .cases
+        .iter()
+        .map(|c| {
+            let stack = Stack::from_toml(&c.stack_toml, &args.job)?;
+            let variant = VariantKey::parse_over(&c.variant, VariantKey::default())?;
+            Ok(Case {
+                variant,
+                stack: Stack {
+                    name: c.material.clone(),
+                    ..stack
+                },
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let equirect = imageio::read_exr(&args.env).context("reading the environment map")?;
+    let gpu = open_gpu(cli)?;
+    let mode = if args.warm {
+        counter::WorkerMode::Warm
+    } else {
+        counter::WorkerMode::Count
+    };
+    counter::worker(
+        &gpu,
+        &equirect,
+        &cases,
+        args.size.width,
+        args.size.height,
+        mode,
+    )?;
+    check_validation(&gpu)
 }
 
 fn check_validation(gpu: &Gpu) -> Result<()> {
@@ -571,6 +852,9 @@ fn main() -> ExitCode {
         Command::Furnace(args) => run_furnace(&cli, args),
         Command::Sheet(args) => run_sheet(&cli, args),
         Command::Bench(args) => run_bench(&cli, args),
+        Command::Sweep(args) => run_sweep(&cli, args),
+        Command::Report(args) => run_report(args),
+        Command::CountWorker(args) => count_worker(&cli, args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -139,6 +139,35 @@ impl Stack {
         self.layers.clone()
     }
 
+    /// The stack resized to `n` layers for layer-count studies: the bottom layer stays the
+    /// substrate and the `n − 1` layers above it cycle through the stack's coats from the top
+    /// (a five-layer stack at `n = 3` keeps its first two coats; at `n = 7` it repeats them).
+    /// Named `NAME @ n layers`. Errs when `n` is 0 or when `n > 1` and the stack has no coat.
+    pub fn with_active_layers(&self, n: usize) -> Result<Self, MaterialError> {
+        let (substrate, coats) = self
+            .layers
+            .split_last()
+            .expect("a validated stack has at least one layer");
+        if n == 0 || (n > 1 && coats.is_empty()) {
+            return Err(MaterialError::File {
+                path: self.source.clone(),
+                message: format!(
+                    "cannot build {n} active layer(s) from `{}`: it has {} coat(s) above its \
+                     substrate (allowed: 1, or any n ≥ 1 when it has a coat)",
+                    self.name,
+                    coats.len()
+                ),
+            });
+        }
+        let mut layers: Vec<LayerParams> = coats.iter().cycle().take(n - 1).copied().collect();
+        layers.push(*substrate);
+        Ok(Self {
+            name: format!("{} @ {n} layers", self.name),
+            layers,
+            ..self.clone()
+        })
+    }
+
     /// Errs when the stack has more layers than a variant's static array size, naming the
     /// first layer that does not fit.
     pub fn check_fits(&self, max_layers: u32) -> Result<(), MaterialError> {

@@ -5,29 +5,62 @@
 //!
 //! The result file is read by other tools: keep `results.json`'s fields (issue #5's schema).
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
+use crate::material::Stack;
 use crate::model::LayerParams;
+use crate::render::forward::ForwardPass;
 use crate::render::Renderer;
 use crate::shader::{Model, VariantKey};
 use crate::tables::environment::EnvDesc;
 
 use super::stats::Summary;
 
+/// One measured combination: a variant shading one material.
+#[derive(Clone, Debug)]
+pub struct Case {
+    pub variant: VariantKey,
+    pub stack: Stack,
+}
+
 pub struct BenchConfig {
-    pub variants: Vec<VariantKey>,
-    pub material: String,
-    pub layers: Vec<LayerParams>,
+    pub cases: Vec<Case>,
     pub width: u32,
     pub height: u32,
     pub frames: u32,
     pub warmup: u32,
 }
 
-#[derive(Debug, Serialize)]
+impl BenchConfig {
+    /// The cases as they will run: a `ggx` baseline on each material that lacks one goes
+    /// first, so every ratio divides by a baseline measured in the same run on the same stack.
+    pub fn with_baselines(&self) -> Vec<Case> {
+        let mut out: Vec<Case> = Vec::new();
+        for case in &self.cases {
+            let has_baseline = self
+                .cases
+                .iter()
+                .chain(&out)
+                .any(|c| c.stack.name == case.stack.name && c.variant.model == Model::Ggx);
+            if !has_baseline {
+                out.push(Case {
+                    variant: VariantKey {
+                        max_layers: case.variant.max_layers,
+                        ..baseline()
+                    },
+                    ..case.clone()
+                });
+            }
+        }
+        out.extend(self.cases.iter().cloned());
+        out
+    }
+}
+
+#[derive(Debug, Serialize, Deserialize)]
 pub struct DeviceInfo {
     pub name: String,
     pub driver: String,
@@ -35,7 +68,7 @@ pub struct DeviceInfo {
     pub vendor_id: u32,
 }
 
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, Deserialize)]
 pub struct Run {
     pub variant: String,
     pub material: String,
@@ -49,13 +82,17 @@ pub struct Run {
     pub fragment_invocations: Option<u64>,
     pub pipeline_ms: f64,
     pub spirv_bytes: usize,
-    /// Filled by the instruction counter (issue #5); `null` until then.
+    /// Instructions executed in llvmpipe's JIT-compiled code (the shaders and triangle setup)
+    /// during the shaded draw, under callgrind (`--counter instructions`); deterministic.
     pub instructions: Option<u64>,
+    /// All instructions executed for the shaded draw, the driver's own work included.
+    #[serde(default)]
+    pub instructions_total: Option<u64>,
     /// `VK_KHR_pipeline_executable_properties` statistics where offered; `null` otherwise.
     pub executable_stats: Option<serde_json::Value>,
 }
 
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, Deserialize)]
 pub struct Results {
     pub device: DeviceInfo,
     pub git_rev: String,
@@ -94,22 +131,29 @@ pub fn run(
     if config.frames == 0 {
         return Err(Error::Unsupported("--frames must be at least 1".into()));
     }
-    let mut variants = config.variants.clone();
-    if !variants.iter().any(|v| v.model == Model::Ggx) {
-        variants.insert(0, baseline());
-    }
+    let cases = config.with_baselines();
     let mut renderer = Renderer::new(gpu, equirect, EnvDesc::default())?;
-    let passes = variants
-        .iter()
-        .map(|&v| renderer.prepare(v))
-        .collect::<Result<Vec<_>>>()?;
-    let mut times = vec![Vec::new(); passes.len()];
-    let mut invocations = vec![None; passes.len()];
-    let total = (config.warmup + config.frames) * passes.len() as u32;
+    let mut passes: Vec<ForwardPass> = Vec::new();
+    let mut pass_of = Vec::with_capacity(cases.len());
+    for case in &cases {
+        let index = match passes.iter().position(|p| p.variant == case.variant) {
+            Some(i) => i,
+            None => {
+                passes.push(renderer.prepare(case.variant)?);
+                passes.len() - 1
+            }
+        };
+        pass_of.push(index);
+    }
+    let layers: Vec<Vec<LayerParams>> = cases.iter().map(|c| c.stack.params()).collect();
+    let mut times = vec![Vec::new(); cases.len()];
+    let mut invocations = vec![None; cases.len()];
+    let total = (config.warmup + config.frames) * cases.len() as u32;
     let mut done = 0;
     for frame in 0..config.warmup + config.frames {
-        for (i, pass) in passes.iter().enumerate() {
-            let result = renderer.render(pass, &config.layers, config.width, config.height)?;
+        for i in 0..cases.len() {
+            let pass = &passes[pass_of[i]];
+            let result = renderer.render(pass, &layers[i], config.width, config.height)?;
             if frame >= config.warmup {
                 times[i].push(result.shaded.duration.as_ms());
                 invocations[i] = result.shaded.fragment_invocations;
@@ -122,11 +166,21 @@ pub fn run(
         .iter()
         .map(|t| Summary::of(t).ok_or_else(|| Error::Unsupported("a timing was not finite".into())))
         .collect::<Result<_>>()?;
-    let base = variants
+    let baseline_of = |material: &str| {
+        cases
+            .iter()
+            .position(|c| c.stack.name == material && c.variant.model == Model::Ggx)
+            .map(|i| summaries[i].median)
+            .expect("with_baselines gives every material a ggx case")
+    };
+    let executable_stats = passes
         .iter()
-        .position(|v| v.model == Model::Ggx)
-        .map(|i| summaries[i].median)
-        .expect("a ggx variant was added above");
+        .map(|p| {
+            Ok(p.pipeline
+                .executable_statistics()?
+                .map(|s| serde_json::to_value(s).expect("statistics serialise")))
+        })
+        .collect::<Result<Vec<_>>>()?;
     let report = &gpu.device.report;
     Ok(Results {
         device: DeviceInfo {
@@ -139,25 +193,26 @@ pub fn run(
         command: std::env::args().collect::<Vec<_>>().join(" "),
         size: [config.width, config.height],
         lp_num_threads: std::env::var("LP_NUM_THREADS").ok(),
-        runs: variants
+        runs: cases
             .iter()
-            .zip(&passes)
+            .zip(&pass_of)
             .zip(summaries.iter().zip(&invocations))
-            .map(|((v, pass), (s, inv))| Run {
-                variant: v.to_string(),
-                material: config.material.clone(),
+            .map(|((case, &p), (s, inv))| Run {
+                variant: case.variant.to_string(),
+                material: case.stack.name.clone(),
                 frames: config.frames,
                 min_ms: s.min,
                 median_ms: s.median,
                 mean_ms: s.mean,
                 max_ms: s.max,
                 stdev_ms: s.stdev,
-                ratio_to_baseline: s.median / base,
+                ratio_to_baseline: s.median / baseline_of(&case.stack.name),
                 fragment_invocations: *inv,
-                pipeline_ms: pass.pipeline.creation_time.as_secs_f64() * 1e3,
-                spirv_bytes: pass.spirv_bytes,
+                pipeline_ms: passes[p].pipeline.creation_time.as_secs_f64() * 1e3,
+                spirv_bytes: passes[p].spirv_bytes,
                 instructions: None,
-                executable_stats: None,
+                instructions_total: None,
+                executable_stats: executable_stats[p].clone(),
             })
             .collect(),
     })
@@ -169,11 +224,11 @@ impl Results {
         let opt = |v: Option<u64>| v.map(|n| n.to_string()).unwrap_or_default();
         let mut out = String::from(
             "variant,material,frames,min_ms,median_ms,mean_ms,max_ms,stdev_ms,ratio_to_baseline,\
-             fragment_invocations,pipeline_ms,spirv_bytes,instructions\n",
+             fragment_invocations,pipeline_ms,spirv_bytes,instructions,instructions_total\n",
         );
         for r in &self.runs {
             out += &format!(
-                "\"{}\",\"{}\",{},{},{},{},{},{},{},{},{},{},{}\n",
+                "\"{}\",\"{}\",{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 r.variant,
                 r.material.replace('"', "\"\""),
                 r.frames,
@@ -186,7 +241,8 @@ impl Results {
                 opt(r.fragment_invocations),
                 r.pipeline_ms,
                 r.spirv_bytes,
-                opt(r.instructions)
+                opt(r.instructions),
+                opt(r.instructions_total)
             );
         }
         out
@@ -203,13 +259,45 @@ impl Results {
             self.lp_num_threads.as_deref().unwrap_or("unset"),
             self.git_rev
         );
+        let counted = self.runs.iter().any(|r| r.instructions.is_some());
+        let base_instructions = self
+            .runs
+            .iter()
+            .find(|r| r.variant.starts_with("model=ggx"))
+            .and_then(|r| r.instructions);
         out += &format!(
-            "{:>9} {:>9} {:>9} {:>9} {:>8} {:>7} {:>9} {:>8}  variant\n",
-            "min ms", "median", "mean", "max", "stdev", "×ggx", "pipe ms", "SPIR-V"
+            "{:>9} {:>9} {:>9} {:>9} {:>8} {:>7} {:>9} {:>8}{}  variant | material\n",
+            "min ms",
+            "median",
+            "mean",
+            "max",
+            "stdev",
+            "×ggx",
+            "pipe ms",
+            "SPIR-V",
+            if counted {
+                format!(" {:>14} {:>7} {:>14}", "JIT instr.", "×ggx", "all instr.")
+            } else {
+                String::new()
+            }
         );
         for r in &self.runs {
+            let instructions = match (counted, r.instructions) {
+                (false, _) => String::new(),
+                (true, None) => format!(" {:>14} {:>7} {:>14}", "–", "–", "–"),
+                (true, Some(n)) => format!(
+                    " {:>14} {:>7} {:>14}",
+                    n,
+                    base_instructions
+                        .map(|b| format!("{:.2}", n as f64 / b as f64))
+                        .unwrap_or_else(|| "–".into()),
+                    r.instructions_total
+                        .map(|t| t.to_string())
+                        .unwrap_or_else(|| "–".into())
+                ),
+            };
             out += &format!(
-                "{:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>8.3} {:>7.2} {:>9.1} {:>8}  {}\n",
+                "{:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>8.3} {:>7.2} {:>9.1} {:>8}{}  {} | {}\n",
                 r.min_ms,
                 r.median_ms,
                 r.mean_ms,
@@ -218,7 +306,9 @@ impl Results {
                 r.ratio_to_baseline,
                 r.pipeline_ms,
                 r.spirv_bytes,
-                r.variant
+                instructions,
+                r.variant,
+                r.material
             );
         }
         out

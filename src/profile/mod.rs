@@ -1,4 +1,10 @@
-//! Measuring variants: the bench runner, its statistics and its result files.
+//! Measuring variants: the bench runner, sweeps over variant axes, instruction counters, charts
+//! and the report.
 
 pub mod bench;
+pub mod callgrind;
+pub mod chart;
+pub mod counter;
+pub mod report;
 pub mod stats;
+pub mod sweep;

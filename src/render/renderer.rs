@@ -40,6 +40,13 @@ pub struct RenderedFrame {
     pub shaded: ScopeTiming,
 }
 
+/// Where [`Renderer::render_observed`] stands when it calls its observer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadedPhase {
+    Before,
+    After,
+}
+
 pub struct Renderer<'g> {
     gpu: &'g Gpu,
     pub environment: Environment,
@@ -122,6 +129,21 @@ impl<'g> Renderer<'g> {
         width: u32,
         height: u32,
     ) -> Result<RenderedFrame> {
+        self.render_observed(pass, layers, width, height, &mut |_| {})
+    }
+
+    /// [`Renderer::render`], with `observe` called on the host right before the shaded draw's
+    /// submission and right after it completed. The sky, the shaded draw and the read-back are
+    /// three submissions, so what runs between the two calls is the shaded draw's recording,
+    /// submission and execution only (the instruction counter brackets it).
+    pub fn render_observed(
+        &self,
+        pass: &ForwardPass,
+        layers: &[LayerParams],
+        width: u32,
+        height: u32,
+        observe: &mut dyn FnMut(ShadedPhase),
+    ) -> Result<RenderedFrame> {
         let max_layers = pass.variant.max_layers as usize;
         if layers.is_empty() || layers.len() > max_layers {
             return Err(Error::Unsupported(format!(
@@ -170,7 +192,7 @@ impl<'g> Renderer<'g> {
         )?;
         let mut profiler = GpuProfiler::new(device, 2, "frame")?;
 
-        submit_and_wait(device, "frame", |rec| {
+        submit_and_wait(device, "sky", |rec| {
             rec.transition(
                 &target,
                 0..1,
@@ -186,8 +208,13 @@ impl<'g> Renderer<'g> {
             rec.draw(3);
             rec.end_rendering();
             profiler.end(rec, scope);
+            Ok(())
+        })?;
 
+        observe(ShadedPhase::Before);
+        submit_and_wait(device, "shaded", |rec| {
             rec.bind_pipeline(&pass.pipeline);
+            rec.bind_set(&pass.pipeline, &self.layout, 0, &set);
             let scope = profiler
                 .begin(rec, "shaded")
                 .expect("the sky scope is closed");
@@ -197,7 +224,11 @@ impl<'g> Renderer<'g> {
             rec.draw_indexed(self.index_count);
             rec.end_rendering();
             profiler.end(rec, scope);
+            Ok(())
+        })?;
+        observe(ShadedPhase::After);
 
+        submit_and_wait(device, "read-back", |rec| {
             rec.transition(
                 &target,
                 0..1,

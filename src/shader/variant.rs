@@ -175,7 +175,7 @@ impl Default for VariantKey {
     }
 }
 
-const AXES: &[&str] = &["model", "max_layers", "fp16", "tir", "fgd", "g2", "ndf"];
+pub const AXES: &[&str] = &["model", "max_layers", "fp16", "tir", "fgd", "g2", "ndf"];
 
 /// The specialization constants of the shading passes, mirrored in
 /// `glsl/include/shared/variant.glsl` (ids 0…5).

@@ -33,5 +33,8 @@ pub use device::{enumerate, Device, DeviceReport, DeviceSelector};
 pub use error::{VkError, VkResult};
 pub use image::{Image, ImageDesc, ImageKind, ImageView, Sampler, SamplerDesc};
 pub use instance::{Instance, InstanceDesc, MessageCounts};
-pub use pipeline::{GraphicsDesc, Pipeline, PipelineLayout, SpecConstants, SpecEntry};
+pub use pipeline::{
+    ExecutableStat, ExecutableStats, GraphicsDesc, Pipeline, PipelineLayout, SpecConstants,
+    SpecEntry,
+};
 pub use query::{GpuProfiler, Nanos, ScopeError, ScopeTiming, ScopeToken};

@@ -291,6 +291,88 @@ impl Pipeline {
     }
 }
 
+/// One compiled executable of a pipeline (a shader stage, as the driver split it) and the
+/// statistics the driver reports for it (`VK_KHR_pipeline_executable_properties`).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ExecutableStats {
+    pub name: String,
+    pub description: String,
+    pub subgroup_size: u32,
+    pub statistics: Vec<ExecutableStat>,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ExecutableStat {
+    pub name: String,
+    pub description: String,
+    pub value: serde_json::Value,
+}
+
+fn c_text(raw: &[std::ffi::c_char]) -> String {
+    let bytes: Vec<u8> = raw
+        .iter()
+        .take_while(|&&c| c != 0)
+        .map(|&c| c as u8)
+        .collect();
+    String::from_utf8_lossy(&bytes).into_owned()
+}
+
+impl Pipeline {
+    /// The driver's per-executable statistics (registers, scratch, instruction counts …);
+    /// `None` where the device does not offer `VK_KHR_pipeline_executable_properties`.
+    pub fn executable_statistics(&self) -> VkResult<Option<Vec<ExecutableStats>>> {
+        let Some(ext) = &self.device.exec_props else {
+            return Ok(None);
+        };
+        let info = vk::PipelineInfoKHR::default().pipeline(self.raw);
+        // SAFETY: the pipeline is alive and was created with CAPTURE_STATISTICS (capture_flags),
+        // the extension's feature is enabled on this device.
+        let executables = unsafe { ext.get_pipeline_executable_properties(&info) }
+            .check("vkGetPipelineExecutablePropertiesKHR")?;
+        let mut out = Vec::with_capacity(executables.len());
+        for (index, exe) in executables.iter().enumerate() {
+            let info = vk::PipelineExecutableInfoKHR::default()
+                .pipeline(self.raw)
+                .executable_index(index as u32);
+            // SAFETY: as above; the index is below the count the driver returned.
+            let stats = unsafe { ext.get_pipeline_executable_statistics(&info) }
+                .check("vkGetPipelineExecutableStatisticsKHR")?;
+            let statistics = stats
+                .iter()
+                .map(|s| {
+                    // SAFETY: the union member read is the one `format` names.
+                    let value = unsafe {
+                        match s.format {
+                            vk::PipelineExecutableStatisticFormatKHR::BOOL32 => {
+                                serde_json::Value::from(s.value.b32 != 0)
+                            }
+                            vk::PipelineExecutableStatisticFormatKHR::INT64 => {
+                                serde_json::Value::from(s.value.i64)
+                            }
+                            vk::PipelineExecutableStatisticFormatKHR::UINT64 => {
+                                serde_json::Value::from(s.value.u64)
+                            }
+                            _ => serde_json::Value::from(s.value.f64),
+                        }
+                    };
+                    ExecutableStat {
+                        name: c_text(&s.name),
+                        description: c_text(&s.description),
+                        value,
+                    }
+                })
+                .collect();
+            out.push(ExecutableStats {
+                name: c_text(&exe.name),
+                description: c_text(&exe.description),
+                subgroup_size: exe.subgroup_size,
+                statistics,
+            });
+        }
+        Ok(Some(out))
+    }
+}
+
 /// Ask the driver to keep executable statistics where it can report them.
 fn capture_flags(device: &Device) -> vk::PipelineCreateFlags {
     if device.exec_props.is_some() {

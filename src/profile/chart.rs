@@ -1,0 +1,387 @@
+//! Sweep charts, drawn with `plotters` twice: once into SVG (text stays text) and once into an
+//! RGB canvas written as PNG. The canvas is lamina's own small plotters backend: plotters 0.3.7
+//! can only rasterise text through `font-kit` (system fontconfig and freetype), so the canvas
+//! draws text with `ab_glyph` and the bundled DejaVu Sans (assets/fonts/).
+
+use std::path::Path;
+
+use ab_glyph::{Font, FontRef, PxScale, ScaleFont};
+use plotters::coord::ranged1d::{SegmentValue, SegmentedCoord, ValueFormatter};
+use plotters::coord::types::RangedCoordi32;
+use plotters::prelude::*;
+use plotters_backend::text_anchor::{HPos, VPos};
+use plotters_backend::{BackendColor, BackendCoord, BackendTextStyle, DrawingErrorKind};
+
+use crate::error::{Error, Result};
+
+static FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+/// One line of a chart: `(category index, value, low, high)` per point.
+pub struct Series {
+    pub label: String,
+    pub points: Vec<(usize, f64, f64, f64)>,
+}
+
+pub struct Chart {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    /// The x axis's categories, in order.
+    pub categories: Vec<String>,
+    pub series: Vec<Series>,
+    /// A horizontal reference line (the ggx baseline), labelled.
+    pub reference: Option<(String, f64)>,
+}
+
+pub const WIDTH: u32 = 900;
+pub const HEIGHT: u32 = 540;
+
+impl Chart {
+    /// Writes `STEM.png` and `STEM.svg` atomically.
+    pub fn write(&self, stem: &Path) -> Result<()> {
+        let svg_path = stem.with_extension("svg");
+        let mut svg = String::new();
+        {
+            let backend = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT));
+            self.draw(backend.into_drawing_area())
+                .map_err(|e| chart_error(&svg_path, e))?;
+        }
+        crate::imageio::write_atomically(&svg_path, |temp| {
+            std::fs::write(temp, &svg).map_err(|e| e.to_string())
+        })?;
+
+        let png_path = stem.with_extension("png");
+        let mut canvas = Canvas::new(WIDTH, HEIGHT);
+        {
+            let area = (&mut canvas).into_drawing_area();
+            self.draw(area).map_err(|e| chart_error(&png_path, e))?;
+        }
+        let rgba: Vec<u8> = canvas
+            .rgb
+            .chunks(3)
+            .flat_map(|p| [p[0], p[1], p[2], 255])
+            .collect();
+        crate::imageio::write_png(&png_path, WIDTH as usize, HEIGHT as usize, &rgba)
+    }
+
+    /// Whether the values span enough decades to need a log-scaled y axis.
+    fn log_scale(&self) -> bool {
+        let values = self
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter().flat_map(|p| [p.1, p.2, p.3]))
+            .chain(self.reference.iter().map(|r| r.1));
+        let (lo, hi) = values
+            .filter(|v| *v > 0.0)
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            });
+        hi > 0.0 && hi / lo > 20.0
+    }
+
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, plotters::coord::Shift>,
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        root.fill(&WHITE)?;
+        let n = self.categories.len().max(1) as i32;
+        let values = || {
+            self.series
+                .iter()
+                .flat_map(|s| s.points.iter().flat_map(|p| [p.1, p.2, p.3]))
+                .chain(self.reference.iter().map(|r| r.1))
+                .filter(|v| v.is_finite() && *v > 0.0)
+        };
+        let top = values().fold(0.0f64, f64::max);
+        let bottom = values().fold(f64::INFINITY, f64::min);
+        let top = if top > 0.0 { top } else { 1.0 };
+        let mut builder = ChartBuilder::on(&root);
+        builder
+            .caption(&self.title, ("sans-serif", 22))
+            .margin(14)
+            .x_label_area_size(48)
+            .y_label_area_size(78);
+        let x = (0..n - 1).into_segmented();
+        if self.log_scale() {
+            let chart = builder.build_cartesian_2d(x, (bottom / 1.5..top * 1.5).log_scale())?;
+            self.plot(chart, " (log scale)")?;
+        } else {
+            let chart = builder.build_cartesian_2d(x, 0.0..top * 1.12)?;
+            self.plot(chart, "")?;
+        }
+        root.present()?;
+        Ok(())
+    }
+
+    fn plot<'a, DB: DrawingBackend + 'a, Y: Ranged<ValueType = f64> + ValueFormatter<f64>>(
+        &self,
+        mut chart: ChartContext<'a, DB, Cartesian2d<SegmentedCoord<RangedCoordi32>, Y>>,
+        y_note: &str,
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        let categories = &self.categories;
+        let y_desc = format!("{}{y_note}", self.y_label);
+        chart
+            .configure_mesh()
+            .x_desc(&self.x_label)
+            .y_desc(y_desc)
+            .x_labels(categories.len().max(1))
+            .x_label_formatter(&|v| match v {
+                SegmentValue::CenterOf(i) => {
+                    categories.get(*i as usize).cloned().unwrap_or_default()
+                }
+                _ => String::new(),
+            })
+            .y_label_formatter(&|v| format_value(*v))
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 16))
+            .light_line_style(RGBColor(235, 235, 235))
+            .draw()?;
+        if let Some((label, value)) = &self.reference {
+            let style = ShapeStyle::from(&RGBColor(90, 90, 90)).stroke_width(2);
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    vec![
+                        (SegmentValue::Exact(0), *value),
+                        (SegmentValue::Last, *value),
+                    ],
+                    style,
+                )))?
+                .label(label.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
+        }
+        for (k, series) in self.series.iter().enumerate() {
+            let colour = Palette99::pick(k).to_rgba();
+            let line = ShapeStyle::from(&colour).stroke_width(2);
+            let at = |i: usize| SegmentValue::CenterOf(i as i32);
+            chart
+                .draw_series(LineSeries::new(
+                    series.points.iter().map(|p| (at(p.0), p.1)),
+                    line,
+                ))?
+                .label(series.label.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], line));
+            chart.draw_series(
+                series
+                    .points
+                    .iter()
+                    .map(|p| Circle::new((at(p.0), p.1), 3, colour.filled())),
+            )?;
+            chart.draw_series(series.points.iter().filter(|p| p.3 > p.2).map(|p| {
+                PathElement::new(
+                    vec![(at(p.0), p.2), (at(p.0), p.3)],
+                    ShapeStyle::from(&colour).stroke_width(1),
+                )
+            }))?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()?;
+        Ok(())
+    }
+}
+
+/// Axis numbers: plain where short, engineering form for counts.
+fn format_value(v: f64) -> String {
+    let a = v.abs();
+    if a >= 1e9 {
+        format!("{:.2}G", v / 1e9)
+    } else if a >= 1e6 {
+        format!("{:.1}M", v / 1e6)
+    } else if a >= 1e4 {
+        format!("{:.0}k", v / 1e3)
+    } else if a >= 100.0 {
+        format!("{v:.0}")
+    } else if a >= 1.0 {
+        format!("{v:.2}")
+    } else {
+        format!("{v:.3}")
+    }
+}
+
+fn chart_error<E: std::error::Error + Send + Sync>(
+    path: &Path,
+    e: DrawingAreaErrorKind<E>,
+) -> Error {
+    Error::Output {
+        path: path.to_owned(),
+        message: format!("drawing the chart: {e}"),
+    }
+}
+
+/// An RGB8 raster that plotters draws into; text through `ab_glyph`.
+pub struct Canvas {
+    width: u32,
+    height: u32,
+    pub rgb: Vec<u8>,
+    font: FontRef<'static>,
+}
+
+#[derive(Debug)]
+pub struct CanvasError;
+
+impl std::fmt::Display for CanvasError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("canvas error")
+    }
+}
+
+impl std::error::Error for CanvasError {}
+
+impl Canvas {
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            rgb: vec![255; (width * height * 3) as usize],
+            font: FontRef::try_from_slice(FONT_BYTES).expect("the bundled font parses"),
+        }
+    }
+
+    fn blend(&mut self, (x, y): BackendCoord, rgb: (u8, u8, u8), alpha: f64) {
+        if x < 0 || y < 0 || x >= self.width as i32 || y >= self.height as i32 {
+            return;
+        }
+        let a = alpha.clamp(0.0, 1.0);
+        let i = (y as usize * self.width as usize + x as usize) * 3;
+        for (c, src) in [rgb.0, rgb.1, rgb.2].into_iter().enumerate() {
+            let dst = f64::from(self.rgb[i + c]);
+            self.rgb[i + c] = (dst + (f64::from(src) - dst) * a).round() as u8;
+        }
+    }
+
+    /// Pixel-space layout of `text` at `size` px: the glyphs' pen positions and the box
+    /// (width, ascent + descent).
+    fn layout(&self, text: &str, size: f64) -> (Vec<ab_glyph::Glyph>, (i32, i32)) {
+        let scale = PxScale::from(size as f32);
+        let scaled = self.font.as_scaled(scale);
+        let mut pen = 0.0f32;
+        let mut previous = None;
+        let mut glyphs = Vec::new();
+        for ch in text.chars() {
+            let id = scaled.glyph_id(ch);
+            if let Some(p) = previous {
+                pen += scaled.kern(p, id);
+            }
+            glyphs.push(id.with_scale_and_position(scale, ab_glyph::point(pen, scaled.ascent())));
+            pen += scaled.h_advance(id);
+            previous = Some(id);
+        }
+        let height = (scaled.ascent() - scaled.descent()).ceil() as i32;
+        (glyphs, (pen.ceil() as i32, height))
+    }
+}
+
+impl DrawingBackend for &mut Canvas {
+    type ErrorType = CanvasError;
+
+    fn get_size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    fn ensure_prepared(&mut self) -> std::result::Result<(), DrawingErrorKind<CanvasError>> {
+        Ok(())
+    }
+
+    fn present(&mut self) -> std::result::Result<(), DrawingErrorKind<CanvasError>> {
+        Ok(())
+    }
+
+    fn draw_pixel(
+        &mut self,
+        point: BackendCoord,
+        color: BackendColor,
+    ) -> std::result::Result<(), DrawingErrorKind<CanvasError>> {
+        self.blend(point, color.rgb, color.alpha);
+        Ok(())
+    }
+
+    fn draw_text<S: BackendTextStyle>(
+        &mut self,
+        text: &str,
+        style: &S,
+        pos: BackendCoord,
+    ) -> std::result::Result<(), DrawingErrorKind<CanvasError>> {
+        let color = style.color();
+        let (glyphs, (width, height)) = self.layout(text, style.size());
+        let dx = match style.anchor().h_pos {
+            HPos::Left => 0,
+            HPos::Right => -width,
+            HPos::Center => -width / 2,
+        };
+        let dy = match style.anchor().v_pos {
+            VPos::Top => 0,
+            VPos::Center => -height / 2,
+            VPos::Bottom => -height,
+        };
+        let transform = style.transform();
+        let mut covered = Vec::new();
+        for glyph in glyphs {
+            if let Some(outline) = self.font.outline_glyph(glyph) {
+                let bounds = outline.px_bounds();
+                outline.draw(|x, y, coverage| {
+                    let gx = bounds.min.x as i32 + x as i32 + dx;
+                    let gy = bounds.min.y as i32 + y as i32 + dy;
+                    covered.push((transform.transform(gx, gy), coverage));
+                });
+            }
+        }
+        for ((x, y), coverage) in covered {
+            self.blend(
+                (pos.0 + x, pos.1 + y),
+                color.rgb,
+                color.alpha * f64::from(coverage),
+            );
+        }
+        Ok(())
+    }
+
+    fn estimate_text_size<S: BackendTextStyle>(
+        &self,
+        text: &str,
+        style: &S,
+    ) -> std::result::Result<(u32, u32), DrawingErrorKind<CanvasError>> {
+        let (_, (w, h)) = self.layout(text, style.size());
+        Ok((w.max(0) as u32, h.max(0) as u32))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_canvas_draws_text_and_lines() {
+        let chart = Chart {
+            title: "title".into(),
+            x_label: "x".into(),
+            y_label: "y".into(),
+            categories: vec!["a".into(), "b".into()],
+            series: vec![Series {
+                label: "s".into(),
+                points: vec![(0, 1.0, 0.9, 1.1), (1, 2.0, 1.8, 2.2)],
+            }],
+            reference: Some(("ggx".into(), 0.5)),
+        };
+        let mut canvas = Canvas::new(WIDTH, HEIGHT);
+        chart.draw((&mut canvas).into_drawing_area()).unwrap();
+        // Dark pixels (text, axes) and coloured ones (the series) are both present.
+        let pixels: Vec<&[u8]> = canvas.rgb.chunks(3).collect();
+        let dark = pixels.iter().filter(|p| p.iter().all(|&c| c < 80)).count();
+        let coloured = pixels
+            .iter()
+            .filter(|p| p.iter().max().unwrap() - p.iter().min().unwrap() > 100)
+            .count();
+        assert!(dark > 500, "{dark} dark pixels");
+        assert!(coloured > 100, "{coloured} coloured pixels");
+        // The title's glyphs: dark pixels in the caption band at the top.
+        let caption_dark = pixels[..(WIDTH * 40) as usize]
+            .iter()
+            .filter(|p| p.iter().all(|&c| c < 100))
+            .count();
+        assert!(caption_dark > 20, "no caption text drawn");
+    }
+}

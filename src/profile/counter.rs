@@ -1,0 +1,364 @@
+//! Deterministic counters: the instructions the CPU executes while lavapipe runs one shaded
+//! draw, counted by `valgrind --tool=callgrind` (DESIGN.md §7). Timestamps on lavapipe are CPU
+//! wall-clock and drift up to 2× between runs; instruction counts repeat to ~1e-5, so CI gates on
+//! them.
+//!
+//! The parent ([`count_instructions`]) runs `lamina count-worker` under callgrind with
+//! instrumentation off; the worker ([`worker`]) builds everything natively (environment, tables,
+//! pipelines), renders each case once more to let llvmpipe JIT its fragment shader, then switches
+//! instrumentation on around the shaded draw's submission only and dumps the count under the
+//! case's name. The parent reads the dumps back.
+
+use std::ffi::CString;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+use crate::error::{Error, Result};
+use crate::gpu::Gpu;
+use crate::imageio::HdrImage;
+use crate::render::forward::ForwardPass;
+use crate::render::{Renderer, ShadedPhase};
+use crate::tables::environment::EnvDesc;
+
+use super::bench::Case;
+use super::callgrind;
+
+/// The environment the worker prefilters: small, because the worker runs under valgrind and
+/// the prefilter is not what is counted. The shaded draw's code path does not depend on the
+/// cube's size (one trilinear fetch per lobe whatever the mip count).
+pub const WORKER_ENV: EnvDesc = EnvDesc {
+    face_size: 64,
+    mip_count: 7,
+    samples: 16,
+};
+
+/// Prefix of the dump names, followed by the case's index.
+const DUMP_PREFIX: &str = "lamina-case-";
+/// The line the worker prints on stderr after each case, read by the parent for progress.
+const PROGRESS_PREFIX: &str = "lamina-counted ";
+
+/// What the worker does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WorkerMode {
+    /// Natively, first: build every pipeline and draw it once, so Mesa's shader disk cache holds
+    /// the compiled shaders and the run under valgrind loads them instead of running LLVM's
+    /// code generation ten times slower.
+    Warm,
+    /// Under callgrind: count each case's shaded draw.
+    Count,
+}
+
+/// Runs in `lamina count-worker`.
+pub fn worker(
+    gpu: &Gpu,
+    equirect: &HdrImage,
+    cases: &[Case],
+    width: u32,
+    height: u32,
+    mode: WorkerMode,
+) -> Result<()> {
+    if mode == WorkerMode::Count && !callgrind::running() {
+        return Err(Error::Unsupported(
+            "count-worker only counts under `valgrind --tool=callgrind --instr-atstart=no`; \
+             use `lamina bench --counter instructions` or a sweep with `counter = \"instructions\"`"
+                .into(),
+        ));
+    }
+    let mut renderer = Renderer::new(gpu, equirect, WORKER_ENV)?;
+    let mut passes: Vec<ForwardPass> = Vec::new();
+    for case in cases {
+        if !passes.iter().any(|p| p.variant == case.variant) {
+            passes.push(renderer.prepare(case.variant)?);
+        }
+    }
+    for (i, case) in cases.iter().enumerate() {
+        let pass = passes
+            .iter()
+            .find(|p| p.variant == case.variant)
+            .expect("prepared above");
+        // llvmpipe compiles a fragment-shader variant at its first draw: keep that out.
+        let layers = case.stack.params();
+        renderer.render(pass, &layers, width, height)?;
+        renderer.render_observed(pass, &layers, width, height, &mut |phase| match phase {
+            ShadedPhase::Before => callgrind::start_instrumentation(),
+            ShadedPhase::After => callgrind::stop_instrumentation(),
+        })?;
+        let name = CString::new(format!("{DUMP_PREFIX}{i}")).expect("no NUL in a number");
+        callgrind::dump_stats_at(&name);
+        eprintln!("{PROGRESS_PREFIX}{}/{}", i + 1, cases.len());
+    }
+    Ok(())
+}
+
+/// What the parent needs to start the worker.
+pub struct CountRequest<'a> {
+    /// The `lamina` executable (the worker is its hidden `count-worker` subcommand).
+    pub exe: &'a Path,
+    /// Arguments placed before the subcommand (`--device …`).
+    pub global_args: Vec<String>,
+    pub env_map: &'a Path,
+    pub cases: &'a [Case],
+    pub width: u32,
+    pub height: u32,
+}
+
+/// Counts the instructions of each case's shaded draw; `progress(done, total)` follows the
+/// worker. Every case gets a count or the whole call fails.
+pub fn count_instructions(
+    request: &CountRequest<'_>,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Vec<Counts>> {
+    let dir = scratch_dir()?;
+    let result = run_worker(request, &dir, &mut progress);
+    // The dumps are read (or the run failed); nothing in the directory is kept.
+    let _ = std::fs::remove_dir_all(&dir);
+    result
+}
+
+fn scratch_dir() -> Result<PathBuf> {
+    let stamp = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_nanos())
+        .unwrap_or(0);
+    let dir = std::env::temp_dir().join(format!("lamina-count-{}-{stamp}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| io_error(&dir, e))?;
+    Ok(dir)
+}
+
+fn run_worker(
+    request: &CountRequest<'_>,
+    dir: &Path,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Vec<Counts>> {
+    let stacks = dir.join("stacks.json");
+    let job = serde_json::to_string(&WorkerJob::from_cases(request.cases))
+        .map_err(|e| Error::Unsupported(format!("encoding the worker's job: {e}")))?;
+    std::fs::write(&stacks, job).map_err(|e| io_error(&stacks, e))?;
+    let warm = Command::new(request.exe)
+        .args(&request.global_args)
+        .arg("count-worker")
+        .arg("--warm")
+        .arg("--job")
+        .arg(&stacks)
+        .arg("--env")
+        .arg(request.env_map)
+        .arg("--size")
+        .arg(format!("{}x{}", request.width, request.height))
+        .env("LP_NUM_THREADS", "0")
+        .output()
+        .map_err(|e| Error::Unsupported(format!("starting the counter's warm-up: {e}")))?;
+    if !warm.status.success() {
+        return Err(Error::Unsupported(format!(
+            "the counter's warm-up run failed ({}): {}",
+            warm.status,
+            String::from_utf8_lossy(&warm.stderr)
+        )));
+    }
+    let out_file = dir.join("callgrind.out");
+    let mut command = Command::new("valgrind");
+    command
+        .arg("--tool=callgrind")
+        .arg("--instr-atstart=no")
+        .arg(format!("--callgrind-out-file={}", out_file.display()))
+        .arg("-q")
+        .arg(request.exe)
+        .args(&request.global_args)
+        .arg("count-worker")
+        .arg("--job")
+        .arg(&stacks)
+        .arg("--env")
+        .arg(request.env_map)
+        .arg("--size")
+        .arg(format!("{}x{}", request.width, request.height))
+        .env("LP_NUM_THREADS", "0")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped());
+    let mut child = command.spawn().map_err(|e| {
+        if e.kind() == std::io::ErrorKind::NotFound {
+            Error::Unsupported(
+                "instruction counting needs valgrind on PATH (Debian: apt-get install valgrind; \
+                 scripts/setup.sh installs it)"
+                    .into(),
+            )
+        } else {
+            Error::Unsupported(format!("starting valgrind: {e}"))
+        }
+    })?;
+    let mut tail: Vec<String> = Vec::new();
+    let total = request.cases.len();
+    progress(0, total);
+    if let Some(stderr) = child.stderr.take() {
+        for line in BufReader::new(stderr).lines().map_while(|l| l.ok()) {
+            if let Some(done) = line
+                .strip_prefix(PROGRESS_PREFIX)
+                .and_then(|rest| rest.split('/').next())
+                .and_then(|n| n.parse().ok())
+            {
+                progress(done, total);
+            } else {
+                tail.push(line);
+                if tail.len() > 40 {
+                    tail.remove(0);
+                }
+            }
+        }
+    }
+    let status = child
+        .wait()
+        .map_err(|e| Error::Unsupported(format!("waiting for valgrind: {e}")))?;
+    if !status.success() {
+        return Err(Error::Unsupported(format!(
+            "the instruction-counting worker failed ({status}); its last messages:\n{}",
+            tail.join("\n")
+        )));
+    }
+    let mut counts = vec![None; total];
+    for entry in std::fs::read_dir(dir).map_err(|e| io_error(dir, e))? {
+        let path = entry.map_err(|e| io_error(dir, e))?.path();
+        let is_dump = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .is_some_and(|n| n.starts_with("callgrind.out"));
+        if !is_dump {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).map_err(|e| io_error(&path, e))?;
+        if let Some((index, count)) = parse_dump(&text) {
+            if let Some(slot) = counts.get_mut(index) {
+                *slot = Some(count);
+            }
+        }
+    }
+    counts
+        .into_iter()
+        .enumerate()
+        .map(|(i, c)| {
+            c.ok_or_else(|| {
+                Error::Unsupported(format!(
+                    "callgrind wrote no count for case {i} ({}); worker messages:\n{}",
+                    request.cases[i].variant,
+                    tail.join("\n")
+                ))
+            })
+        })
+        .collect()
+}
+
+fn io_error(path: &Path, e: std::io::Error) -> Error {
+    Error::Output {
+        path: path.to_owned(),
+        message: e.to_string(),
+    }
+}
+
+/// What one counted draw executed, split by where the code lives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Counts {
+    /// Everything: the driver's work for the draw included.
+    pub total: u64,
+    /// Only llvmpipe's JIT-compiled code (shaders, triangle setup): code in anonymous
+    /// mappings, which callgrind names `???`. Deterministic for a given shader and coverage.
+    pub jit: u64,
+}
+
+/// The case index and counts of one callgrind dump, when it is one of ours.
+///
+/// Self costs are summed per object (`ob=`): every cost line adds its last number (the `Ir`
+/// event) to the current object, except the line after `calls=`, which carries the call's
+/// inclusive cost. Objects are named on first use (`ob=(3) /path`) and by number after.
+fn parse_dump(text: &str) -> Option<(usize, Counts)> {
+    let mut index = None;
+    let mut names: std::collections::HashMap<&str, &str> = std::collections::HashMap::new();
+    let mut current = "";
+    let mut after_call = false;
+    let mut counts = Counts { total: 0, jit: 0 };
+    for line in text.lines() {
+        if after_call {
+            after_call = false;
+            continue;
+        }
+        if let Some(desc) = line.strip_prefix("desc: Trigger: Client Request: ") {
+            index = desc.trim().strip_prefix(DUMP_PREFIX)?.parse().ok();
+        } else if let Some(spec) = line
+            .strip_prefix("ob=")
+            .or_else(|| line.strip_prefix("cob="))
+        {
+            let (id, name) = match spec.split_once(' ') {
+                Some((id, name)) => (id, Some(name)),
+                None => (spec, None),
+            };
+            if let Some(name) = name {
+                names.insert(id, name);
+            }
+            if line.starts_with("ob=") {
+                current = names.get(id).copied().unwrap_or(id);
+            }
+        } else if line.starts_with("calls=") {
+            after_call = true;
+        } else if line.starts_with(|c: char| c.is_ascii_digit() || "+-*".contains(c)) {
+            let cost: u64 = line.split_whitespace().last()?.parse().ok()?;
+            counts.total += cost;
+            if current == "???" {
+                counts.jit += cost;
+            }
+        }
+    }
+    Some((index?, counts))
+}
+
+/// The cases as the worker reads them back (JSON in the scratch directory).
+#[derive(serde::Serialize, serde::Deserialize)]
+pub struct WorkerJob {
+    pub cases: Vec<WorkerCase>,
+}
+
+#[derive(serde::Serialize, serde::Deserialize)]
+pub struct WorkerCase {
+    pub variant: String,
+    pub material: String,
+    /// The stack in the material file format (TOML), so the worker validates it like any file.
+    pub stack_toml: String,
+}
+
+impl WorkerJob {
+    fn from_cases(cases: &[Case]) -> Self {
+        Self {
+            cases: cases
+                .iter()
+                .map(|c| WorkerCase {
+                    variant: c.variant.to_string(),
+                    material: c.stack.name.clone(),
+                    stack_toml: c.stack.to_toml(),
+                })
+                .collect(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_dump_splits_jit_code_from_the_rest() {
+        let text = "version: 1\ncreator: callgrind-3.19.0\npart: 2\n\
+                    desc: Trigger: Client Request: lamina-case-3\n\
+                    positions: line\nevents: Ir\nsummary: 0\n\n\
+                    ob=(1) /usr/lib/libvulkan_lvp.so\nfl=(1) ???\nfn=(1) 0x10\n0 100\n\
+                    cob=(2) ???\ncfn=(2) 0x20\ncalls=1 0\n0 5000\n+2 7\n\
+                    ob=(2)\nfn=(2)\n0 40\n* 2\n\
+                    ob=(1)\nfn=(3) 0x30\n-1 3\n";
+        let (index, counts) = parse_dump(text).unwrap();
+        assert_eq!(index, 3);
+        assert_eq!(
+            counts,
+            Counts {
+                total: 152,
+                jit: 42
+            }
+        );
+        let exit = "desc: Trigger: Program termination\nsummary: 12\nob=(1) x\n0 12\n";
+        assert_eq!(parse_dump(exit), None);
+    }
+}

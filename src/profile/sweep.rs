@@ -1,0 +1,754 @@
+//! Sweep files (`profiling/sweeps/*.toml`): a study is a set of variants × materials measured
+//! in one interleaved bench run; a suite lists studies and overrides their resolution and
+//! frame counts (`reproduce.toml`).
+//!
+//! ```toml
+//! name = "fp16"                       # output sub-directory and report heading
+//! title = "Half precision"
+//! description = "…"                   # one paragraph, copied into the report
+//! materials = ["varnished-gold"]      # presets or files (relative to this file)
+//! base = "model=tm2"                  # variant axes every case starts from
+//! size = "320x180"
+//! frames = 10
+//! warmup = 2
+//! counter = "instructions"            # optional: also count instructions under callgrind
+//! counter_size = "48x48"              # resolution of the counted draw
+//! fit = "linear"                      # optional: report a least-squares line along axis 1
+//! [[axis]]                            # cartesian product, first axis on the charts' x axis
+//! name = "max_layers"
+//! values = [2, 4, 8, 16]
+//! [[axis]]
+//! name = "fp16"
+//! values = ["off", "on"]
+//! [[published]]                       # the talk's figures this study is compared with
+//! label = "2-flux"
+//! match = "model=tm2"
+//! ms = 1.433
+//! ```
+//!
+//! Axes are the variant axes of DESIGN.md §4 plus `active_layers` (the material resized with
+//! [`Stack::with_active_layers`]) and `material` (an alternative to `materials`). Every file is
+//! checked completely — axes, values, sizes, materials, the availability of each variant —
+//! before any GPU work.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::material::Stack;
+use crate::render::forward::check_available;
+use crate::shader::variant::AXES;
+use crate::shader::VariantKey;
+
+use super::bench::Case;
+
+/// Largest side accepted for `size` and `counter_size`.
+pub const MAX_SIDE: u32 = 4096;
+/// The pseudo-axes a sweep adds to the variant axes.
+pub const EXTRA_AXES: [&str; 2] = ["active_layers", "material"];
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepFile {
+    pub name: Option<String>,
+    pub title: Option<String>,
+    pub description: Option<String>,
+    /// A suite: sweep files (relative to this one) run in order, with this file's `size`,
+    /// `frames`, `warmup`, `counter` and `counter_size` overriding theirs.
+    pub studies: Option<Vec<String>>,
+    pub materials: Option<Vec<String>>,
+    pub base: Option<String>,
+    pub size: Option<String>,
+    pub frames: Option<u32>,
+    pub warmup: Option<u32>,
+    pub counter: Option<String>,
+    pub counter_size: Option<String>,
+    pub fit: Option<String>,
+    #[serde(default, rename = "axis")]
+    pub axes: Vec<AxisSpec>,
+    #[serde(default)]
+    pub published: Vec<Published>,
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisSpec {
+    pub name: String,
+    pub values: Vec<toml::Value>,
+}
+
+/// One published figure and the runs it is compared with.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Published {
+    pub label: String,
+    /// Axis values a run must have (`model=tm6,fp16=on`); the first matching run is used.
+    #[serde(rename = "match")]
+    pub matches: String,
+    pub ms: f64,
+    /// Where the figure comes from, printed beside it.
+    pub source: Option<String>,
+}
+
+/// A study, checked and expanded: the cases in run order and each case's axis coordinates.
+#[derive(Clone, Debug)]
+pub struct Study {
+    pub name: String,
+    pub title: String,
+    pub description: String,
+    pub file: PathBuf,
+    pub source_text: String,
+    pub width: u32,
+    pub height: u32,
+    pub frames: u32,
+    pub warmup: u32,
+    /// Resolution of the counted draw when instruction counting is on.
+    pub counter: Option<(u32, u32)>,
+    pub axes: Vec<String>,
+    pub points: Vec<Point>,
+    /// Combinations left out because the stack does not fit the variant's `max_layers`.
+    pub skipped: Vec<String>,
+    pub published: Vec<Published>,
+    pub fit: bool,
+}
+
+/// One case of a study with its value on every swept axis (in axis order).
+#[derive(Clone, Debug)]
+pub struct Point {
+    pub case: Case,
+    pub coords: Vec<String>,
+}
+
+/// What `lamina sweep FILE` runs: one study, or a suite's studies (then `true`).
+pub fn load(file: &Path) -> Result<(Vec<Study>, bool)> {
+    let sweep = read(file)?;
+    match &sweep.studies {
+        None => Ok((vec![expand(file, &sweep, &Overrides::default())?], false)),
+        Some(list) => {
+            if list.is_empty() {
+                return Err(bad(
+                    file,
+                    "studies",
+                    "an empty list; name at least one sweep file",
+                ));
+            }
+            if !sweep.axes.is_empty() || sweep.materials.is_some() || sweep.base.is_some() {
+                return Err(bad(
+                    file,
+                    "studies",
+                    "a suite lists studies only; `axis`, `materials` and `base` belong in the \
+                     study files",
+                ));
+            }
+            let overrides = Overrides {
+                size: sweep.size.clone(),
+                frames: sweep.frames,
+                warmup: sweep.warmup,
+                counter: sweep.counter.clone(),
+                counter_size: sweep.counter_size.clone(),
+            };
+            let dir = file.parent().unwrap_or(Path::new("."));
+            let mut studies = Vec::new();
+            for entry in list {
+                let path = dir.join(entry);
+                let inner = read(&path)?;
+                if inner.studies.is_some() {
+                    return Err(bad(&path, "studies", "a suite cannot list another suite"));
+                }
+                let study = expand(&path, &inner, &overrides)?;
+                if studies.iter().any(|s: &Study| s.name == study.name) {
+                    return Err(bad(
+                        file,
+                        "studies",
+                        &format!("two studies are named `{}`", study.name),
+                    ));
+                }
+                studies.push(study);
+            }
+            Ok((studies, true))
+        }
+    }
+}
+
+#[derive(Default)]
+struct Overrides {
+    size: Option<String>,
+    frames: Option<u32>,
+    warmup: Option<u32>,
+    counter: Option<String>,
+    counter_size: Option<String>,
+}
+
+fn bad(file: &Path, field: &str, message: &str) -> Error {
+    Error::Input {
+        path: file.to_owned(),
+        message: format!("`{field}`: {message}"),
+    }
+}
+
+fn read(file: &Path) -> Result<SweepFile> {
+    let text = std::fs::read_to_string(file).map_err(|e| Error::Input {
+        path: file.to_owned(),
+        message: format!("cannot read the sweep file: {e}"),
+    })?;
+    toml::from_str(&text).map_err(|e| Error::Input {
+        path: file.to_owned(),
+        message: e.to_string(),
+    })
+}
+
+/// Parses `WxH` with both sides in 1..=[`MAX_SIDE`].
+pub fn parse_size(text: &str) -> Option<(u32, u32)> {
+    let (w, h) = text.split_once('x')?;
+    let side = |s: &str| {
+        s.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|n| (1..=MAX_SIDE).contains(n))
+    };
+    Some((side(w)?, side(h)?))
+}
+
+fn value_text(value: &toml::Value) -> Option<String> {
+    match value {
+        toml::Value::String(s) => Some(s.clone()),
+        toml::Value::Integer(n) => Some(n.to_string()),
+        toml::Value::Boolean(b) => Some(if *b { "on" } else { "off" }.to_string()),
+        _ => None,
+    }
+}
+
+fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
+    let source_text = std::fs::read_to_string(file).map_err(|e| Error::Input {
+        path: file.to_owned(),
+        message: e.to_string(),
+    })?;
+    let name = match &sweep.name {
+        Some(n) => n.clone(),
+        None => file
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "sweep".into()),
+    };
+    if name.is_empty()
+        || !name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+    {
+        return Err(bad(
+            file,
+            "name",
+            &format!("`{name}`: use letters, digits, `-` and `_` (it names a directory)"),
+        ));
+    }
+    let size_text = over
+        .size
+        .clone()
+        .or_else(|| sweep.size.clone())
+        .unwrap_or_else(|| "320x180".into());
+    let (width, height) = parse_size(&size_text).ok_or_else(|| {
+        bad(
+            file,
+            "size",
+            &format!("`{size_text}`: expected WxH with both sides in 1..={MAX_SIDE}"),
+        )
+    })?;
+    let frames = over.frames.or(sweep.frames).unwrap_or(10);
+    if frames == 0 {
+        return Err(bad(
+            file,
+            "frames",
+            "0: at least one measured frame is needed",
+        ));
+    }
+    let warmup = over.warmup.or(sweep.warmup).unwrap_or(2);
+    let counter = match over.counter.as_deref().or(sweep.counter.as_deref()) {
+        None | Some("none") => None,
+        Some("instructions") => {
+            let text = over
+                .counter_size
+                .clone()
+                .or_else(|| sweep.counter_size.clone())
+                .unwrap_or_else(|| "48x48".into());
+            Some(parse_size(&text).ok_or_else(|| {
+                bad(
+                    file,
+                    "counter_size",
+                    &format!("`{text}`: expected WxH with both sides in 1..={MAX_SIDE}"),
+                )
+            })?)
+        }
+        Some(other) => {
+            return Err(bad(
+                file,
+                "counter",
+                &format!("`{other}`: allowed: instructions, none"),
+            ))
+        }
+    };
+    let fit = match sweep.fit.as_deref() {
+        None => false,
+        Some("linear") => true,
+        Some(other) => return Err(bad(file, "fit", &format!("`{other}`: allowed: linear"))),
+    };
+
+    let mut axes: Vec<(String, Vec<String>)> = Vec::new();
+    for (i, axis) in sweep.axes.iter().enumerate() {
+        let field = format!("axis[{i}]");
+        if !AXES.contains(&axis.name.as_str()) && !EXTRA_AXES.contains(&axis.name.as_str()) {
+            return Err(bad(
+                file,
+                &format!("{field}.name"),
+                &format!(
+                    "unknown axis `{}`; allowed: {}, {}",
+                    axis.name,
+                    AXES.join(", "),
+                    EXTRA_AXES.join(", ")
+                ),
+            ));
+        }
+        if axes.iter().any(|(n, _)| *n == axis.name) {
+            return Err(bad(
+                file,
+                &format!("{field}.name"),
+                &format!("axis `{}` is given twice", axis.name),
+            ));
+        }
+        if axis.values.is_empty() {
+            return Err(bad(
+                file,
+                &format!("{field}.values"),
+                &format!(
+                    "axis `{}` has no values: the product would be empty",
+                    axis.name
+                ),
+            ));
+        }
+        let values = axis
+            .values
+            .iter()
+            .map(|v| {
+                value_text(v).ok_or_else(|| {
+                    bad(
+                        file,
+                        &format!("{field}.values"),
+                        &format!("`{v}`: values are strings, integers or booleans"),
+                    )
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        axes.push((axis.name.clone(), values));
+    }
+    if axes.iter().any(|(n, _)| n == "material") && sweep.materials.is_some() {
+        return Err(bad(
+            file,
+            "materials",
+            "give the materials either as `materials` or as a `material` axis, not both",
+        ));
+    }
+    let materials = sweep
+        .materials
+        .clone()
+        .unwrap_or_else(|| vec!["varnished-gold".into()]);
+    if materials.is_empty() {
+        return Err(bad(
+            file,
+            "materials",
+            "an empty list: the product would be empty",
+        ));
+    }
+    let dir = file.parent().unwrap_or(Path::new("."));
+    let resolve = |spec: &str| -> Result<Stack> {
+        let local = dir.join(spec);
+        let stack = if spec.ends_with(".toml") && local.exists() {
+            Stack::load(&local)
+        } else {
+            Stack::resolve(spec)
+        };
+        stack.map_err(|e| Error::Input {
+            path: file.to_owned(),
+            message: format!("material `{spec}`: {e}"),
+        })
+    };
+    let base_text = sweep.base.clone().unwrap_or_default();
+
+    // The cartesian product, first axis slowest, materials (when not an axis) outermost.
+    let mut combos: Vec<Vec<String>> = vec![Vec::new()];
+    for (_, values) in &axes {
+        combos = combos
+            .into_iter()
+            .flat_map(|c| {
+                values.iter().map(move |v| {
+                    let mut c = c.clone();
+                    c.push(v.clone());
+                    c
+                })
+            })
+            .collect();
+    }
+    let material_list: Vec<Option<String>> = if axes.iter().any(|(n, _)| n == "material") {
+        vec![None]
+    } else {
+        materials.iter().cloned().map(Some).collect()
+    };
+    let mut points = Vec::new();
+    let mut skipped = Vec::new();
+    for material in &material_list {
+        for coords in &combos {
+            let mut spec = material.clone();
+            let mut active = None;
+            let mut key_text = base_text.clone();
+            for ((axis, _), value) in axes.iter().zip(coords) {
+                match axis.as_str() {
+                    "material" => spec = Some(value.clone()),
+                    "active_layers" => {
+                        active = Some(
+                            value
+                                .parse::<usize>()
+                                .ok()
+                                .filter(|n| (1..=16).contains(n))
+                                .ok_or_else(|| {
+                                    bad(
+                                        file,
+                                        "axis.values",
+                                        &format!(
+                                        "active_layers `{value}`: allowed: an integer in 1..=16"
+                                    ),
+                                    )
+                                })?,
+                        )
+                    }
+                    _ => {
+                        if !key_text.is_empty() {
+                            key_text.push(',');
+                        }
+                        key_text += &format!("{axis}={value}");
+                    }
+                }
+            }
+            let spec = spec.expect("a material comes from `materials` or the material axis");
+            let mut stack = resolve(&spec)?;
+            if let Some(n) = active {
+                stack = stack.with_active_layers(n).map_err(|e| Error::Input {
+                    path: file.to_owned(),
+                    message: e.to_string(),
+                })?;
+            }
+            let material_base = VariantKey {
+                model: stack.model,
+                max_layers: VariantKey::default()
+                    .max_layers
+                    .max(stack.layers.len() as u32),
+                ..VariantKey::default()
+            };
+            let variant =
+                VariantKey::parse_over(&key_text, material_base).map_err(|e| Error::Input {
+                    path: file.to_owned(),
+                    message: format!("variant `{key_text}`: {e}"),
+                })?;
+            check_available(&variant).map_err(|e| Error::Input {
+                path: file.to_owned(),
+                message: e.to_string(),
+            })?;
+            if stack.layers.len() > variant.max_layers as usize {
+                skipped.push(format!("{} with {variant}", stack.name));
+                continue;
+            }
+            points.push(Point {
+                case: Case { variant, stack },
+                coords: coords.clone(),
+            });
+        }
+    }
+    if points.is_empty() {
+        return Err(bad(
+            file,
+            "axis",
+            "the product is empty: every combination was skipped because the stack has more \
+             layers than `max_layers`",
+        ));
+    }
+    for (i, p) in sweep.published.iter().enumerate() {
+        if !(p.ms.is_finite() && p.ms > 0.0) {
+            return Err(bad(
+                file,
+                &format!("published[{i}].ms"),
+                &format!("{}: allowed: a positive number of milliseconds", p.ms),
+            ));
+        }
+        VariantKey::parse_over(&p.matches, VariantKey::default())
+            .map_err(|e| bad(file, &format!("published[{i}].match"), &e.to_string()))?;
+    }
+    Ok(Study {
+        title: sweep.title.clone().unwrap_or_else(|| name.clone()),
+        name,
+        description: sweep.description.clone().unwrap_or_default(),
+        file: file.to_owned(),
+        source_text,
+        width,
+        height,
+        frames,
+        warmup,
+        counter,
+        axes: axes.into_iter().map(|(n, _)| n).collect(),
+        points,
+        skipped,
+        published: sweep.published.clone(),
+        fit,
+    })
+}
+
+/// Whether a run's variant key has every axis value `pattern` names (`model=tm6,fp16=on`).
+pub fn key_matches(variant: &str, pattern: &str) -> bool {
+    let pairs: Vec<&str> = variant.split(',').map(str::trim).collect();
+    pattern
+        .split(',')
+        .map(str::trim)
+        .filter(|p| !p.is_empty())
+        .all(|want| pairs.contains(&want))
+}
+
+/// Where the instruction counter's worker comes from (`lamina count-worker`).
+pub struct CounterSetup {
+    pub exe: PathBuf,
+    pub global_args: Vec<String>,
+    pub env_map: PathBuf,
+}
+
+/// What a study's directory holds besides `results.json`: read by `lamina report`.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+pub struct StudyMeta {
+    pub name: String,
+    pub title: String,
+    pub description: String,
+    pub sweep_file: String,
+    pub axes: Vec<String>,
+    /// `runs[run]` of results.json has these axis values; runs not listed are baselines.
+    pub points: Vec<PointMeta>,
+    pub skipped: Vec<String>,
+    pub published: Vec<Published>,
+    pub fit: bool,
+    pub counter_size: Option<[u32; 2]>,
+}
+
+#[derive(Clone, Debug, Deserialize, Serialize)]
+pub struct PointMeta {
+    pub run: usize,
+    pub coords: Vec<String>,
+}
+
+/// Runs one study: timings interleaved on `gpu`, then (when asked) instruction counts.
+pub fn run(
+    gpu: &crate::gpu::Gpu,
+    equirect: &crate::imageio::HdrImage,
+    study: &Study,
+    counter: Option<&CounterSetup>,
+    mut progress: impl FnMut(&str, usize, usize),
+) -> Result<(super::bench::Results, StudyMeta)> {
+    let config = super::bench::BenchConfig {
+        cases: study.points.iter().map(|p| p.case.clone()).collect(),
+        width: study.width,
+        height: study.height,
+        frames: study.frames,
+        warmup: study.warmup,
+    };
+    let all = config.with_baselines();
+    let baselines = all.len() - study.points.len();
+    let mut results = super::bench::run(gpu, equirect, &config, |done, total| {
+        progress("frames", done as usize, total as usize)
+    })?;
+    if let (Some((w, h)), Some(setup)) = (study.counter, counter) {
+        let counts = super::counter::count_instructions(
+            &super::counter::CountRequest {
+                exe: &setup.exe,
+                global_args: setup.global_args.clone(),
+                env_map: &setup.env_map,
+                cases: &all,
+                width: w,
+                height: h,
+            },
+            |done, total| progress("counted", done, total),
+        )?;
+        for (run, count) in results.runs.iter_mut().zip(counts) {
+            run.instructions = Some(count.jit);
+            run.instructions_total = Some(count.total);
+        }
+    }
+    let meta = StudyMeta {
+        name: study.name.clone(),
+        title: study.title.clone(),
+        description: study.description.clone(),
+        sweep_file: study.file.display().to_string(),
+        axes: study.axes.clone(),
+        points: study
+            .points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| PointMeta {
+                run: baselines + i,
+                coords: p.coords.clone(),
+            })
+            .collect(),
+        skipped: study.skipped.clone(),
+        published: study.published.clone(),
+        fit: study.fit,
+        counter_size: study
+            .counter
+            .filter(|_| counter.is_some())
+            .map(|(w, h)| [w, h]),
+    };
+    Ok((results, meta))
+}
+
+fn write_text(path: &Path, text: &str) -> Result<()> {
+    crate::imageio::write_atomically(path, |temp| {
+        std::fs::write(temp, text).map_err(|e| e.to_string())
+    })
+}
+
+/// Writes `results.json`, `results.csv`, `study.json`, `sweep.toml` (the file as run) and the
+/// charts into `dir`; returns the chart paths (PNG).
+pub fn write(
+    dir: &Path,
+    study: &Study,
+    results: &super::bench::Results,
+    meta: &StudyMeta,
+) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::Output {
+        path: dir.to_owned(),
+        message: e.to_string(),
+    })?;
+    let results_json = serde_json::to_string_pretty(results).expect("results serialise");
+    let meta_json = serde_json::to_string_pretty(meta).expect("study metadata serialises");
+    write_text(&dir.join("results.json"), &results_json)?;
+    write_text(&dir.join("results.csv"), &results.csv())?;
+    write_text(&dir.join("study.json"), &meta_json)?;
+    write_text(&dir.join("sweep.toml"), &study.source_text)?;
+    let mut charts = Vec::new();
+    for (stem, chart) in charts_of(results, meta) {
+        let path = dir.join(stem);
+        chart.write(&path)?;
+        charts.push(path.with_extension("png"));
+    }
+    Ok(charts)
+}
+
+/// A value read off a run with its whiskers: (value, low, high).
+type RunValue = dyn Fn(&super::bench::Run) -> Option<(f64, f64, f64)>;
+
+/// The study's charts: median time (min–max whiskers) per x category, one line per
+/// combination of the other axes; and the instruction counts when measured.
+pub fn charts_of(
+    results: &super::bench::Results,
+    meta: &StudyMeta,
+) -> Vec<(&'static str, super::chart::Chart)> {
+    use super::chart::{Chart, Series};
+    let x_axis = meta
+        .axes
+        .first()
+        .cloned()
+        .unwrap_or_else(|| "variant".into());
+    let mut categories: Vec<String> = Vec::new();
+    let mut labels: Vec<String> = Vec::new();
+    let materials: Vec<&str> = {
+        let mut m: Vec<&str> = Vec::new();
+        for p in &meta.points {
+            let name = results.runs[p.run].material.as_str();
+            if !m.contains(&name) {
+                m.push(name);
+            }
+        }
+        m
+    };
+    let mut placed = Vec::new();
+    for p in &meta.points {
+        let category = p.coords.first().cloned().unwrap_or_else(|| "base".into());
+        let mut label_parts: Vec<String> = meta
+            .axes
+            .iter()
+            .zip(&p.coords)
+            .skip(1)
+            .filter(|(axis, _)| axis.as_str() != "material")
+            .map(|(axis, v)| format!("{axis}={v}"))
+            .collect();
+        if materials.len() > 1 && x_axis != "material" {
+            label_parts.insert(0, results.runs[p.run].material.clone());
+        }
+        let label = if label_parts.is_empty() {
+            "median".to_string()
+        } else {
+            label_parts.join(", ")
+        };
+        let ci = match categories.iter().position(|c| *c == category) {
+            Some(i) => i,
+            None => {
+                categories.push(category);
+                categories.len() - 1
+            }
+        };
+        let si = match labels.iter().position(|l| *l == label) {
+            Some(i) => i,
+            None => {
+                labels.push(label);
+                labels.len() - 1
+            }
+        };
+        placed.push((ci, si, p.run));
+    }
+    let baseline = results
+        .runs
+        .iter()
+        .find(|r| r.variant.starts_with("model=ggx"));
+    let build = |value: &RunValue| {
+        labels
+            .iter()
+            .enumerate()
+            .map(|(si, label)| Series {
+                label: label.clone(),
+                points: placed
+                    .iter()
+                    .filter(|p| p.1 == si)
+                    .filter_map(|&(ci, _, run)| {
+                        value(&results.runs[run]).map(|(v, lo, hi)| (ci, v, lo, hi))
+                    })
+                    .collect(),
+            })
+            .collect::<Vec<_>>()
+    };
+    let device = &results.device.name;
+    let mut charts = vec![(
+        "chart-time",
+        Chart {
+            title: format!(
+                "{} — shaded draw, {}x{} ({device})",
+                meta.title, results.size[0], results.size[1]
+            ),
+            x_label: x_axis.clone(),
+            y_label: "GPU time, ms (median; whiskers min–max)".into(),
+            categories: categories.clone(),
+            series: build(&|r| Some((r.median_ms, r.min_ms, r.max_ms))),
+            reference: baseline.map(|b| ("ggx baseline".to_string(), b.median_ms)),
+        },
+    )];
+    if results.runs.iter().any(|r| r.instructions.is_some()) {
+        let size = meta
+            .counter_size
+            .map(|[w, h]| format!("{w}x{h}"))
+            .unwrap_or_default();
+        charts.push((
+            "chart-instructions",
+            Chart {
+                title: format!("{} — instructions of the shaded draw, {size}", meta.title),
+                x_label: x_axis,
+                y_label: "instructions (callgrind, LP_NUM_THREADS=0)".into(),
+                categories,
+                series: build(&|r| r.instructions.map(|n| (n as f64, n as f64, n as f64))),
+                reference: baseline
+                    .and_then(|b| b.instructions)
+                    .map(|n| ("ggx baseline".to_string(), n as f64)),
+            },
+        ));
+    }
+    charts
+}

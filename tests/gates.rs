@@ -1,0 +1,74 @@
+//! CI's performance gates: orderings of deterministic instruction counts (callgrind, lavapipe,
+//! `LP_NUM_THREADS=0`), measured in one worker run — never wall-clock time. The gated count is
+//! the instructions executed in llvmpipe's JIT-compiled code: the shader's own cost, free of the
+//! driver's per-draw work (see profiling/README.md for why the total is not gated).
+
+mod common;
+
+use std::path::Path;
+
+use lamina::material::Stack;
+use lamina::profile::bench::Case;
+use lamina::profile::counter::{count_instructions, CountRequest};
+use lamina::shader::VariantKey;
+
+#[test]
+fn instruction_counts_order_the_variants() {
+    let stack = Stack::resolve("varnished-gold").unwrap();
+    assert_eq!(stack.layers.len(), 2);
+    let keys = [
+        "model=ggx,max_layers=2",
+        "model=tm2,max_layers=2",
+        "model=tm2,max_layers=16",
+        "model=tm6,max_layers=2",
+        "model=tm2,max_layers=4",
+        "model=tm2,max_layers=4,fp16=on",
+        // The same case again, after the others: the count must repeat.
+        "model=tm2,max_layers=2",
+    ];
+    let cases: Vec<Case> = keys
+        .iter()
+        .map(|k| Case {
+            variant: k.parse::<VariantKey>().unwrap(),
+            stack: stack.clone(),
+        })
+        .collect();
+    let env = common::repo_path("assets/env/studio.exr");
+    let counts = count_instructions(
+        &CountRequest {
+            exe: Path::new(env!("CARGO_BIN_EXE_lamina")),
+            global_args: Vec::new(),
+            env_map: &env,
+            cases: &cases,
+            width: 32,
+            height: 32,
+        },
+        |_, _| {},
+    )
+    .expect("callgrind worker");
+    for (k, n) in keys.iter().zip(&counts) {
+        println!("{:>14} JIT {:>14} all  {k}", n.jit, n.total);
+    }
+    let jit: Vec<u64> = counts.iter().map(|c| c.jit).collect();
+    let [ggx, tm2, tm2_16, tm6, tm2_4, tm2_4_fp16, tm2_again] = jit[..] else {
+        panic!("one count per case");
+    };
+    let repeat = (tm2 as f64 - tm2_again as f64).abs() / tm2 as f64;
+    println!("repeatability: {repeat:.2e}");
+    assert!(
+        repeat < 1e-4,
+        "the same draw counted {tm2} then {tm2_again}"
+    );
+    assert!(tm2 > ggx, "tm2 {tm2} <= ggx {ggx}");
+    assert!(tm6 > tm2, "tm6 {tm6} <= tm2 {tm2}");
+    assert!(
+        tm2_16 > tm2,
+        "max_layers=16 {tm2_16} <= max_layers=2 {tm2} at 2 active layers"
+    );
+    // At max_layers=4: lavapipe rebuilds tm2 shaders of max_layers <= 2 at every draw,
+    // specialised to the material (profiling/README.md), which blurs the fp16 comparison there.
+    assert!(
+        tm2_4_fp16 > tm2_4,
+        "lavapipe emulates fp16: {tm2_4_fp16} <= fp32 {tm2_4}"
+    );
+}

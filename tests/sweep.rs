@@ -1,0 +1,229 @@
+//! `lamina sweep` and `lamina report`: result files, charts and bad sweep files.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use lamina::profile::sweep;
+
+fn lamina(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lamina"))
+        .args(args)
+        .current_dir(dir)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .output()
+        .expect("run lamina")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+const SMALL: &str = r#"
+name = "small"
+title = "Small sweep"
+materials = ["varnished-gold"]
+size = "64x64"
+frames = 3
+warmup = 1
+[[axis]]
+name = "model"
+values = ["ggx", "tm2", "tm6"]
+[[published]]
+label = "2-flux"
+match = "model=tm2"
+ms = 1.433
+[[published]]
+label = "6-flux"
+match = "model=tm6"
+ms = 23.275
+"#;
+
+#[test]
+fn a_sweep_writes_schema_json_matching_csv_charts_and_a_report() {
+    let dir = common::scratch_dir("sweep-small");
+    std::fs::write(dir.join("small.toml"), SMALL).unwrap();
+    let out = lamina(
+        &["--validation", "sweep", "small.toml", "--out", "res"],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}\n{}",
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+    let res = dir.join("res");
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(res.join("results.json")).unwrap()).unwrap();
+    for key in [
+        "device",
+        "git_rev",
+        "command",
+        "size",
+        "lp_num_threads",
+        "runs",
+    ] {
+        assert!(json.get(key).is_some(), "missing `{key}`");
+    }
+    for key in ["name", "driver", "api_version", "vendor_id"] {
+        assert!(json["device"].get(key).is_some(), "missing device `{key}`");
+    }
+    assert_eq!(json["size"], serde_json::json!([64, 64]));
+    let runs = json["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 3, "3 variants, the ggx one is the baseline");
+    for run in runs {
+        for key in [
+            "variant",
+            "material",
+            "frames",
+            "min_ms",
+            "median_ms",
+            "mean_ms",
+            "max_ms",
+            "stdev_ms",
+            "ratio_to_baseline",
+            "fragment_invocations",
+            "pipeline_ms",
+            "spirv_bytes",
+            "instructions",
+            "executable_stats",
+        ] {
+            assert!(run.get(key).is_some(), "run lacks `{key}`: {run}");
+        }
+        let ms = |k: &str| run[k].as_f64().unwrap();
+        assert!(ms("min_ms") <= ms("median_ms") && ms("median_ms") <= ms("max_ms"));
+        assert!(ms("min_ms") <= ms("mean_ms") && ms("mean_ms") <= ms("max_ms"));
+        assert!(ms("stdev_ms") >= 0.0);
+        assert_eq!(run["frames"], 3);
+        if run["variant"].as_str().unwrap().starts_with("model=ggx") {
+            assert_eq!(run["ratio_to_baseline"].as_f64().unwrap(), 1.0);
+        }
+    }
+    let csv = std::fs::read_to_string(res.join("results.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), runs.len());
+    for (row, run) in rows.iter().zip(runs) {
+        let fields: Vec<&str> = row.split(',').collect();
+        let median: f64 = fields[fields.len() - 10].parse().unwrap();
+        assert!(row.contains(run["variant"].as_str().unwrap()));
+        assert_eq!(median, run["median_ms"].as_f64().unwrap());
+    }
+    for chart in ["chart-time.png", "chart-time.svg"] {
+        let len = std::fs::metadata(res.join(chart)).unwrap().len();
+        assert!(len > 2000, "{chart}: {len} bytes");
+    }
+    let svg = std::fs::read_to_string(res.join("chart-time.svg")).unwrap();
+    assert!(svg.contains("Small sweep") && svg.contains("tm6"));
+    let report = std::fs::read_to_string(res.join("REPORT.md")).unwrap();
+    assert!(report.contains("## Small sweep"));
+    assert!(report.contains("| 6-flux | 23.275 | 16.24× |"), "{report}");
+    assert!(report.contains("chart-time.png"));
+    assert!(
+        text(&out.stdout).contains("REPORT.md"),
+        "the report's path is printed"
+    );
+
+    // `lamina report` over the same directory writes the same document elsewhere.
+    let out = lamina(&["report", "res", "--out", "again/REPORT.md"], &dir);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let again = std::fs::read_to_string(dir.join("again/REPORT.md")).unwrap();
+    assert!(again.contains("](../res/chart-time.png)"), "{again}");
+}
+
+fn load_error(name: &str, body: &str) -> String {
+    let dir = common::scratch_dir(&format!("sweep-bad-{name}"));
+    let file = dir.join(format!("{name}.toml"));
+    std::fs::write(&file, body).unwrap();
+    match sweep::load(&file) {
+        Ok(_) => panic!("{name}: accepted"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn bad_sweep_files_are_refused_before_any_gpu_work() {
+    let e = load_error("axis", "[[axis]]\nname = \"colour\"\nvalues = [1]\n");
+    assert!(
+        e.contains("axis[0].name")
+            && e.contains("unknown axis `colour`")
+            && e.contains("max_layers"),
+        "{e}"
+    );
+    let e = load_error("empty", "[[axis]]\nname = \"model\"\nvalues = []\n");
+    assert!(e.contains("axis[0].values") && e.contains("empty"), "{e}");
+    let e = load_error(
+        "nofit",
+        "materials = [\"five-layers\"]\n[[axis]]\nname = \"max_layers\"\nvalues = [1, 2]\n",
+    );
+    assert!(e.contains("product is empty"), "{e}");
+    for size in ["0x10", "64", "64x99999", "axb"] {
+        let e = load_error("size", &format!("size = \"{size}\"\n"));
+        assert!(
+            e.contains("`size`") && e.contains(size) && e.contains("WxH"),
+            "{e}"
+        );
+    }
+    let e = load_error(
+        "value",
+        "[[axis]]\nname = \"g2\"\nvalues = [\"smith\", \"nope\"]\n",
+    );
+    assert!(e.contains("nope") && e.contains("height-correlated"), "{e}");
+    let e = load_error("key", "colour = 1\n");
+    assert!(e.contains("colour"), "{e}");
+    let e = load_error("counter", "counter = \"cycles\"\n");
+    assert!(e.contains("`counter`") && e.contains("instructions"), "{e}");
+    let e = load_error("suite", "studies = [\"missing.toml\"]\n");
+    assert!(e.contains("missing.toml"), "{e}");
+
+    // Through the command line: exit status 1, the file and field named, no output written.
+    let dir = common::scratch_dir("sweep-bad-cli");
+    std::fs::write(
+        dir.join("bad.toml"),
+        "[[axis]]\nname = \"colour\"\nvalues = [1]\n",
+    )
+    .unwrap();
+    let out = lamina(&["sweep", "bad.toml", "--out", "res"], &dir);
+    assert!(!out.status.success());
+    let err = text(&out.stderr);
+    assert!(
+        err.contains("bad.toml") && err.contains("unknown axis `colour`"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!dir.join("res").exists());
+}
+
+#[test]
+fn every_committed_sweep_file_expands() {
+    let dir = common::repo_path("profiling/sweeps");
+    let (studies, suite) = sweep::load(&dir.join("reproduce.toml")).unwrap();
+    assert!(suite);
+    assert!(studies.len() >= 5);
+    let static_size = studies
+        .iter()
+        .find(|s| s.name == "static-array-size")
+        .unwrap();
+    // 8 sizes × 5 active counts, less the 4 + 3 + 2 + 1 that do not fit.
+    assert_eq!(static_size.points.len(), 40 - 10);
+    for s in &studies {
+        assert_eq!(
+            (s.width, s.height),
+            (160, 90),
+            "{}: suite size applies",
+            s.name
+        );
+        assert_eq!(s.counter, Some((48, 48)));
+    }
+    for name in ["quick", "static-array-size", "fp16", "g2", "flux", "growth"] {
+        sweep::load(&dir.join(format!("{name}.toml"))).unwrap();
+    }
+    // The studies waiting for issue #6's tables say so.
+    for name in ["tir", "fgd"] {
+        let e = sweep::load(&dir.join(format!("{name}.toml")))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("issue #6"), "{e}");
+    }
+}
