@@ -17,6 +17,7 @@ layout(set = 0, binding = 2) uniform sampler2D split_sum;
 layout(set = 0, binding = 3, std140) uniform Material {
     MaterialGpu material;
 };
+layout(set = 0, binding = 4) uniform sampler3D tir_table;
 
 #include "lib/ibl.glsl"
 #include "lib/tm2.glsl"

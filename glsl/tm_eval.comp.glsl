@@ -17,6 +17,7 @@ layout(set = 0, binding = 2, std430) readonly buffer Samples {
 layout(set = 0, binding = 3, std430) writeonly buffer Results {
     vec4 values[];
 } results;
+layout(set = 0, binding = 4) uniform sampler3D tir_table;
 
 layout(push_constant) uniform Push {
     uint sample_count;

@@ -63,6 +63,9 @@ enum Command {
     Sweep(SweepArgs),
     /// Write profiling/REPORT.md from sweep results, beside the talk's published figures.
     Report(ReportArgs),
+    /// Build a precomputed table (or load it from the cache), print its statistics and error
+    /// studies.
+    Tables(TablesArgs),
     /// Internal: counts instructions of shaded draws; runs under callgrind, started by
     /// `--counter instructions`.
     #[command(hide = true)]
@@ -91,6 +94,41 @@ struct SweepArgs {
     /// Check and expand the file, print the cases, and stop before any GPU work.
     #[arg(long)]
     dry_run: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum TableKind {
+    /// Karis's 2-channel split-sum table (the fgd=karis axis value).
+    FgdKaris,
+    /// Belcour, Bati & Barla 2020 4-channel table.
+    FgdBelcour,
+    /// The 64⁴ FGD table as a 64×64×4096 3-D image.
+    Fgd4d,
+    /// The talk's 64×64×2048 resampling of the 4-D table.
+    FgdResampled,
+    /// The 3-D TIR table (tir=lut32 / lut16).
+    Tir,
+}
+
+#[derive(clap::Args)]
+struct TablesArgs {
+    #[arg(value_enum)]
+    kind: TableKind,
+    /// Write the table in the reference's binary format (ALGORITHMS.md §6).
+    #[arg(long, value_name = "FILE")]
+    out: Option<PathBuf>,
+    /// Write a heat map of the table's comparison (tir: |analytic − table|) as PNG.
+    #[arg(long, value_name = "FILE.png")]
+    error_map: Option<PathBuf>,
+    /// Texels per axis.
+    #[arg(long, default_value_t = 64, value_name = "N")]
+    size: u32,
+    /// Samples per texel (default: the size the renderer uses).
+    #[arg(long, value_name = "N")]
+    samples: Option<u32>,
+    /// Build even when a valid cached table exists.
+    #[arg(long)]
+    rebuild: bool,
 }
 
 #[derive(clap::Args)]
@@ -594,10 +632,10 @@ fn progress_bar(what: &str) -> ProgressBar {
 /// instructions, which measure a shader only where the CPU runs it.
 fn counter_setup(gpu: &Gpu, env_map: &Path) -> Result<CounterSetup> {
     let report = &gpu.device.report;
-    if report.device_type != "cpu" {
+    if !report.device_type.eq_ignore_ascii_case("cpu") {
         anyhow::bail!(
             "--counter instructions counts the CPU instructions lavapipe executes; the selected \
-             device `{}` is a {} GPU (choose lavapipe with --device llvmpipe, or drop the counter)",
+             device `{}` is of type {} (choose lavapipe with --device llvmpipe, or drop the counter)",
             report.name,
             report.device_type
         );
@@ -713,6 +751,177 @@ fn run_sweep(cli: &Cli, args: &SweepArgs) -> Result<()> {
         report_path.display()
     );
     Ok(())
+}
+
+fn run_tables(cli: &Cli, args: &TablesArgs) -> Result<()> {
+    use lamina::tables::{cache, split_sum, tir};
+    if !(2..=256).contains(&args.size) {
+        anyhow::bail!("--size {}: allowed 2..=256 texels per axis", args.size);
+    }
+    if args.samples == Some(0) {
+        anyhow::bail!("--samples 0: allowed 1 or more samples per texel");
+    }
+    match args.kind {
+        TableKind::Tir => {}
+        TableKind::FgdKaris => {
+            if args.out.is_some() || args.error_map.is_some() {
+                anyhow::bail!("fgd-karis: --out and --error-map apply to the tir table only");
+            }
+            let gpu = open_gpu(cli)?;
+            let samples = args.samples.unwrap_or(split_sum::DEFAULT_SAMPLES);
+            let started = std::time::Instant::now();
+            let table = split_sum::SplitSumTable::build(
+                &gpu,
+                lamina::shader::G2::HeightCorrelated,
+                args.size,
+                samples,
+            )?;
+            println!(
+                "fgd-karis: {0}x{0} (A, B), {samples} samples per texel, built in {1:.2} s on {2}",
+                args.size,
+                started.elapsed().as_secs_f64(),
+                gpu.device.report.name
+            );
+            let mut worst = 0.0f64;
+            for (i, j) in spot_points(args.size) {
+                let (mu, alpha) = table.coordinates(i, j);
+                let cpu =
+                    split_sum::cpu_reference(mu, alpha, lamina::shader::G2::HeightCorrelated, 256);
+                let gpu_v = table.texel(i, j);
+                worst = worst
+                    .max((f64::from(gpu_v[0]) - cpu[0]).abs())
+                    .max((f64::from(gpu_v[1]) - cpu[1]).abs());
+            }
+            println!("spot check against the f64 reference at 16 texels: max |Δ| = {worst:.2e}");
+            check_validation(&gpu)?;
+            return Ok(());
+        }
+        other => anyhow::bail!(
+            "{other:?}: this table is not built yet (the FGD tables of issue #6); \
+             available: fgd-karis, tir"
+        ),
+    }
+    let gpu = open_gpu(cli)?;
+    let samples = args.samples.unwrap_or(tir::DEFAULT_SAMPLES);
+    let dir = cache::dir();
+    let bar = progress_bar("tir table (η slices)");
+    let started = std::time::Instant::now();
+    let progress = |done: u32, total: u32| {
+        bar.set_length(u64::from(total));
+        bar.set_position(u64::from(done));
+    };
+    let (table, cached) = if args.rebuild {
+        let table = tir::TirTable::build(&gpu, args.size, samples, progress)?;
+        if let Some(d) = &dir {
+            cache::store(d, &tir::cache_key(args.size, samples), &table.texels)?;
+        }
+        (table, false)
+    } else {
+        tir::TirTable::load_or_build(&gpu, args.size, samples, dir.as_deref(), progress)?
+    };
+    bar.finish_and_clear();
+    let where_ = dir
+        .as_deref()
+        .map(|d| {
+            cache::path_of(d, &tir::cache_key(args.size, samples))
+                .display()
+                .to_string()
+        })
+        .unwrap_or_else(|| "no cache directory".into());
+    println!(
+        "tir: {0}x{0}x{0} (μ, α, η), {samples} samples per texel, {1} ({2:.2} s) on {3}; cache: {where_}",
+        args.size,
+        if cached { "loaded from the cache" } else { "built" },
+        started.elapsed().as_secs_f64(),
+        gpu.device.report.name
+    );
+    let n = table.texels.len() as f64;
+    let (min, max) = table
+        .texels
+        .iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let mean = table.texels.iter().map(|&v| f64::from(v)).sum::<f64>() / n;
+    println!("values: min {min:.4}, mean {mean:.4}, max {max:.4}");
+    let mut worst = 0.0f64;
+    for (i, j) in spot_points(args.size) {
+        let k = 1 + (i * 7 + j * 3) % (args.size - 2);
+        let (mu, alpha, eta) = table.coordinates(i, j, k);
+        let cpu = tir::cpu_reference(mu, alpha, eta, 256);
+        worst = worst.max((f64::from(table.texel(i, j, k)) - cpu).abs());
+    }
+    println!("spot check against the f64 reference (256² midpoint rule) at 16 texels: max |Δ| = {worst:.2e}");
+    let half_gap = table
+        .texels
+        .iter()
+        .map(|&v| (f64::from(half::f16::from_f32(v).to_f32()) - f64::from(v)).abs())
+        .fold(0.0f64, f64::max);
+    println!("lut16 against lut32: max |Δ| = {half_gap:.2e} (half-float rounding of values ≤ 1: ≤ 2.44e-4)");
+    let analytic = tir::error_against(&table, &lamina::model::tir::AnalyticTir);
+    println!(
+        "analytic estimator against the table ({} grid points, 0 < η < 1): MSE {:.4}, mean |Δ| {:.4}, \
+         max |Δ| {:.3} at (μ, α, η) = ({:.3}, {:.3}, {:.3}); the talk: MSE 0.0764, max 0.5",
+        analytic.points,
+        analytic.mse,
+        analytic.mean_abs,
+        analytic.max_abs,
+        analytic.worst_at.0,
+        analytic.worst_at.1,
+        analytic.worst_at.2
+    );
+    if let Some(path) = &args.out {
+        let bytes = tir::reference_file_bytes(&table);
+        imageio::write_atomically(path, |temp| {
+            std::fs::write(temp, &bytes).map_err(|e| e.to_string())
+        })?;
+        println!("wrote {}", path.display());
+    }
+    if let Some(path) = &args.error_map {
+        let size = args.size;
+        let panels = [0.3, 0.5, 0.7, 0.9]
+            .iter()
+            .map(|&eta: &f64| {
+                let k = (eta * f64::from(size - 1)).round() as u32;
+                let (_, _, eta_k) = table.coordinates(0, 0, k);
+                let values = (0..size)
+                    .map(|j| {
+                        (0..size)
+                            .map(|i| {
+                                let (mu, alpha, eta) = table.coordinates(i, j, k);
+                                let a = lamina::model::Tir::tir(
+                                    &lamina::model::tir::AnalyticTir,
+                                    mu,
+                                    alpha,
+                                    eta,
+                                );
+                                (a - f64::from(table.texel(i, j, k))).abs()
+                            })
+                            .collect()
+                    })
+                    .collect();
+                (format!("η = {eta_k:.3}"), values)
+            })
+            .collect();
+        lamina::profile::chart::HeatMap {
+            title: "TIR: |analytic estimator − table|".into(),
+            x_label: "μ (cos θ)".into(),
+            y_label: "α".into(),
+            panels,
+            value_label: "absolute error".into(),
+        }
+        .write_png(path)?;
+        println!("wrote {}", path.display());
+    }
+    check_validation(&gpu)
+}
+
+/// 16 texel indices spread over an n×n grid, corners included.
+fn spot_points(n: u32) -> Vec<(u32, u32)> {
+    let at = [0, (n - 1) / 3, 2 * (n - 1) / 3, n - 1];
+    at.iter()
+        .flat_map(|&i| at.iter().map(move |&j| (i, j)))
+        .collect()
 }
 
 fn run_report(args: &ReportArgs) -> Result<()> {
@@ -854,6 +1063,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => run_bench(&cli, args),
         Command::Sweep(args) => run_sweep(&cli, args),
         Command::Report(args) => run_report(args),
+        Command::Tables(args) => run_tables(&cli, args),
         Command::CountWorker(args) => count_worker(&cli, args),
     };
     match result {

@@ -6,6 +6,7 @@ mod common;
 use lamina::model::{tm2, tm6, Evaluation, LayerParams, NoTir};
 use lamina::render::eval::GpuEvaluator;
 use lamina::shader::{Model, VariantKey};
+use lamina::tables::tir::provider;
 
 /// xorshift64*: a tiny seeded generator, enough for test cases.
 struct Rng(u64);
@@ -122,6 +123,12 @@ fn gpu_matches_cpu_oracle_on_random_cases() {
         "model=tm6,g2=smith",
         "model=tm6,ndf=karis,max_layers=8",
         "model=tm6,g2=earl",
+        "model=tm2,tir=lut32",
+        "model=tm2,tir=lut16,g2=smith",
+        "model=tm2,tir=constant",
+        "model=tm2,tir=analytic",
+        "model=tm6,tir=lut32",
+        "model=tm6,tir=analytic",
     ];
     let mut rng = Rng(0x1a3f_5c7e_9b2d_4f61);
     let mut cases = 0;
@@ -135,9 +142,10 @@ fn gpu_matches_cpu_oracle_on_random_cases() {
             let cosines: Vec<f64> = (0..5).map(|_| rng.range(0.05, 1.0)).collect();
             let on_gpu = evaluator.evaluate(&stack, &cosines).unwrap();
             for (&mu, g) in cosines.iter().zip(&on_gpu) {
+                let tir = provider(variant.tir, &evaluator.tir);
                 let cpu = match variant.model {
-                    Model::Tm6 => tm6::evaluate(&stack, mu, &evaluator.table, &NoTir),
-                    _ => tm2::evaluate(&stack, mu, &evaluator.table, &NoTir),
+                    Model::Tm6 => tm6::evaluate(&stack, mu, &evaluator.table, tir.as_ref()),
+                    _ => tm2::evaluate(&stack, mu, &evaluator.table, tir.as_ref()),
                 };
                 assert!(
                     finite(g),

@@ -200,13 +200,13 @@ fn every_committed_sweep_file_expands() {
     let dir = common::repo_path("profiling/sweeps");
     let (studies, suite) = sweep::load(&dir.join("reproduce.toml")).unwrap();
     assert!(suite);
-    assert!(studies.len() >= 5);
+    assert!(studies.len() >= 6);
     let static_size = studies
         .iter()
         .find(|s| s.name == "static-array-size")
         .unwrap();
-    // 8 sizes × 5 active counts, less the 4 + 3 + 2 + 1 that do not fit.
-    assert_eq!(static_size.points.len(), 40 - 10);
+    // 5 sizes × 5 active counts, less the 4 + 3 + 1 that do not fit (1, 2 and 4 layers).
+    assert_eq!(static_size.points.len(), 25 - 8);
     for s in &studies {
         assert_eq!(
             (s.width, s.height),

@@ -15,6 +15,7 @@ pub mod fgd;
 pub mod fresnel;
 pub mod hg;
 pub mod microfacet;
+pub mod tir;
 pub mod tm2;
 pub mod tm6;
 

@@ -349,6 +349,122 @@ impl DrawingBackend for &mut Canvas {
     }
 }
 
+/// A grid of values drawn as coloured cells, panels side by side, with a colour bar: the error
+/// maps of `lamina tables`.
+pub struct HeatMap {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    /// Each panel: its caption and `values[row][column]` (row 0 at the bottom).
+    pub panels: Vec<(String, Vec<Vec<f64>>)>,
+    /// What the colour bar measures.
+    pub value_label: String,
+}
+
+/// A perceptually ordered ramp (dark blue → teal → yellow), `t` in [0, 1].
+fn ramp(t: f64) -> RGBColor {
+    const STOPS: [(f64, [f64; 3]); 5] = [
+        (0.0, [0.07, 0.04, 0.33]),
+        (0.25, [0.23, 0.32, 0.55]),
+        (0.5, [0.13, 0.57, 0.55]),
+        (0.75, [0.37, 0.79, 0.38]),
+        (1.0, [0.99, 0.91, 0.14]),
+    ];
+    let t = t.clamp(0.0, 1.0);
+    let k = STOPS.iter().position(|s| s.0 >= t).unwrap_or(4).max(1);
+    let (a, b) = (STOPS[k - 1], STOPS[k]);
+    let f = (t - a.0) / (b.0 - a.0);
+    let c = |i: usize| ((a.1[i] + (b.1[i] - a.1[i]) * f) * 255.0).round() as u8;
+    RGBColor(c(0), c(1), c(2))
+}
+
+impl HeatMap {
+    /// Writes the map as PNG (`path`), text drawn with the bundled font.
+    pub fn write_png(&self, path: &Path) -> Result<()> {
+        let (width, height) = (260 * self.panels.len() as u32 + 140, 340);
+        let mut canvas = Canvas::new(width, height);
+        self.draw((&mut canvas).into_drawing_area())
+            .map_err(|e| chart_error(path, e))?;
+        let rgba: Vec<u8> = canvas
+            .rgb
+            .chunks(3)
+            .flat_map(|p| [p[0], p[1], p[2], 255])
+            .collect();
+        crate::imageio::write_png(path, width as usize, height as usize, &rgba)
+    }
+
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, plotters::coord::Shift>,
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        root.fill(&WHITE)?;
+        let root = root.titled(&self.title, ("sans-serif", 18))?;
+        let max = self
+            .panels
+            .iter()
+            .flat_map(|p| p.1.iter().flatten())
+            .fold(0.0f64, |m, &v| m.max(v));
+        let scale = if max > 0.0 { max } else { 1.0 };
+        let (panels_area, bar_area) = root.split_horizontally(root.dim_in_pixel().0 - 140);
+        let areas = panels_area.split_evenly((1, self.panels.len().max(1)));
+        for (area, (caption, values)) in areas.iter().zip(&self.panels) {
+            let rows = values.len();
+            let cols = values.first().map_or(0, Vec::len);
+            let mut chart = ChartBuilder::on(area)
+                .caption(caption, ("sans-serif", 14))
+                .margin(8)
+                .x_label_area_size(36)
+                .y_label_area_size(40)
+                .build_cartesian_2d(0.0..1.0, 0.0..1.0)?;
+            chart
+                .configure_mesh()
+                .disable_mesh()
+                .x_desc(&self.x_label)
+                .y_desc(&self.y_label)
+                .x_labels(3)
+                .y_labels(3)
+                .label_style(("sans-serif", 12))
+                .axis_desc_style(("sans-serif", 13))
+                .draw()?;
+            let (dx, dy) = (1.0 / cols.max(1) as f64, 1.0 / rows.max(1) as f64);
+            chart.draw_series(values.iter().enumerate().flat_map(|(r, row)| {
+                row.iter().enumerate().map(move |(c, &v)| {
+                    let (x, y) = (c as f64 * dx, r as f64 * dy);
+                    Rectangle::new([(x, y), (x + dx, y + dy)], ramp(v / scale).filled())
+                })
+            }))?;
+        }
+        let mut bar = ChartBuilder::on(&bar_area)
+            .margin(8)
+            .margin_top(28)
+            .x_label_area_size(36)
+            .y_label_area_size(56)
+            .build_cartesian_2d(0.0..1.0, 0.0..scale)?;
+        bar.configure_mesh()
+            .disable_mesh()
+            .disable_x_axis()
+            .y_desc(&self.value_label)
+            .y_labels(5)
+            .y_label_formatter(&|v| format!("{v:.3}"))
+            .label_style(("sans-serif", 12))
+            .axis_desc_style(("sans-serif", 13))
+            .draw()?;
+        let steps = 64;
+        bar.draw_series((0..steps).map(|i| {
+            let (a, b) = (
+                scale * f64::from(i) / f64::from(steps),
+                scale * f64::from(i + 1) / f64::from(steps),
+            );
+            Rectangle::new(
+                [(0.0, a), (1.0, b)],
+                ramp((f64::from(i) + 0.5) / f64::from(steps)).filled(),
+            )
+        }))?;
+        root.present()?;
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

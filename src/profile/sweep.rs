@@ -672,7 +672,11 @@ pub fn charts_of(
             .filter(|(axis, _)| axis.as_str() != "material")
             .map(|(axis, v)| format!("{axis}={v}"))
             .collect();
-        if materials.len() > 1 && x_axis != "material" {
+        let material_is_swept = meta
+            .axes
+            .iter()
+            .any(|a| a == "material" || a == "active_layers");
+        if materials.len() > 1 && !material_is_swept {
             label_parts.insert(0, results.runs[p.run].material.clone());
         }
         let label = if label_parts.is_empty() {
@@ -739,9 +743,12 @@ pub fn charts_of(
         charts.push((
             "chart-instructions",
             Chart {
-                title: format!("{} — instructions of the shaded draw, {size}", meta.title),
+                title: format!(
+                    "{} — JIT instructions of the shaded draw, {size}",
+                    meta.title
+                ),
                 x_label: x_axis,
-                y_label: "instructions (callgrind, LP_NUM_THREADS=0)".into(),
+                y_label: "JIT instructions (callgrind, LP_NUM_THREADS=0)".into(),
                 categories,
                 series: build(&|r| r.instructions.map(|n| (n as f64, n as f64, n as f64))),
                 reference: baseline

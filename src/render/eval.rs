@@ -7,6 +7,7 @@ use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::{Evaluation, LayerParams, Lobe};
 use crate::shader::{Model, VariantKey};
 use crate::tables::split_sum::{self, SplitSumTable};
+use crate::tables::tir::TirTable;
 use crate::vk::{
     submit_and_wait, Access, BindingKind, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
     Resource, Sampler, SamplerDesc,
@@ -31,6 +32,8 @@ pub struct GpuEvaluator<'g> {
     /// The FGD table the shader samples (`fgd=karis`); CPU runs that must match the GPU use it
     /// as their provider.
     pub table: SplitSumTable,
+    /// The TIR table the shader samples (`tir=lut32`/`lut16`; zeros otherwise).
+    pub tir: TirTable,
     sampler: Sampler,
 }
 
@@ -57,22 +60,25 @@ impl<'g> GpuEvaluator<'g> {
                 BindingKind::SampledImage,
                 BindingKind::StorageBuffer,
                 BindingKind::StorageBuffer,
+                BindingKind::SampledImage,
             ],
             std::mem::size_of::<Push>() as u32,
             &variant.spec(),
         )?;
-        let table = SplitSumTable::build(
+        let table = SplitSumTable::load_or_build(
             gpu,
             variant.g2,
             split_sum::DEFAULT_SIZE,
             split_sum::DEFAULT_SAMPLES,
         )?;
+        let tir = TirTable::for_variant(gpu, variant.tir)?;
         let sampler = Sampler::new(&gpu.device, SamplerDesc::linear_clamp(), "eval tables")?;
         Ok(Self {
             gpu,
             variant,
             kernel,
             table,
+            tir,
             sampler,
         })
     }
@@ -123,7 +129,11 @@ impl<'g> GpuEvaluator<'g> {
         set.write(0, Resource::Buffer(&material))
             .write(1, Resource::Sampled(&self.table.view, &self.sampler))
             .write(2, Resource::Buffer(&samples))
-            .write(3, Resource::Buffer(&results));
+            .write(3, Resource::Buffer(&results))
+            .write(
+                4,
+                Resource::Sampled(self.tir.view_for(self.variant.tir), &self.sampler),
+            );
         let count = cosines.len() as u32;
         submit_and_wait(device, "eval", |rec| {
             rec.bind_pipeline(&self.kernel.pipeline);

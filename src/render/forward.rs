@@ -2,7 +2,7 @@
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
-use crate::shader::{Fgd, Tir, VariantKey};
+use crate::shader::{Fgd, VariantKey};
 use crate::vk::{Format, GraphicsDesc, Pipeline, PipelineLayout};
 
 use super::scene::Vertex;
@@ -13,9 +13,7 @@ pub const ENTRIES: [&str; 2] = ["forward.vert.glsl", "forward.frag.glsl"];
 /// Refuses the axis values whose shader code or tables do not exist yet, naming the issue
 /// that brings them.
 pub fn check_available(variant: &VariantKey) -> Result<()> {
-    let missing = if variant.tir != Tir::None {
-        Some("tir other than `none` (the TIR tables, issue #6)")
-    } else if variant.fgd != Fgd::Karis {
+    let missing = if variant.fgd != Fgd::Karis {
         Some("fgd other than `karis` (the FGD tables, issue #6)")
     } else {
         None

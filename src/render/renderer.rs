@@ -12,9 +12,10 @@ use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
 use crate::model::LayerParams;
-use crate::shader::{VariantKey, G2};
+use crate::shader::{Tir, VariantKey, G2};
 use crate::tables::environment::{EnvDesc, Environment};
 use crate::tables::split_sum::{self, SplitSumTable};
+use crate::tables::tir::TirTable;
 use crate::vk::{
     submit_and_wait, Access, BindingKind, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
     DescriptorSetLayout, Format, GpuProfiler, Image, ImageDesc, ImageState, PipelineLayout,
@@ -51,6 +52,10 @@ pub struct Renderer<'g> {
     gpu: &'g Gpu,
     pub environment: Environment,
     split_sums: HashMap<G2, SplitSumTable>,
+    /// The TIR table, built (or loaded from the disk cache) when a LUT variant is prepared.
+    tir: Option<TirTable>,
+    /// Zeros bound in place of the TIR table for the other variants.
+    tir_unused: TirTable,
     set_layout: DescriptorSetLayout,
     layout: PipelineLayout,
     sampler: Sampler,
@@ -72,6 +77,7 @@ impl<'g> Renderer<'g> {
                 BindingKind::SampledImage,
                 BindingKind::SampledImage,
                 BindingKind::UniformBuffer,
+                BindingKind::SampledImage,
             ],
             Stages::Graphics,
             "scene",
@@ -96,6 +102,8 @@ impl<'g> Renderer<'g> {
             gpu,
             environment,
             split_sums: HashMap::new(),
+            tir: None,
+            tir_unused: TirTable::for_variant(gpu, Tir::None)?,
             set_layout,
             layout,
             sampler,
@@ -110,13 +118,16 @@ impl<'g> Renderer<'g> {
     /// Compiles and builds the pipeline of `variant` (and the split-sum table its G2 needs).
     pub fn prepare(&mut self, variant: VariantKey) -> Result<ForwardPass> {
         if !self.split_sums.contains_key(&variant.g2) {
-            let table = SplitSumTable::build(
+            let table = SplitSumTable::load_or_build(
                 self.gpu,
                 variant.g2,
                 split_sum::DEFAULT_SIZE,
                 split_sum::DEFAULT_SAMPLES,
             )?;
             self.split_sums.insert(variant.g2, table);
+        }
+        if matches!(variant.tir, Tir::Lut32 | Tir::Lut16) && self.tir.is_none() {
+            self.tir = Some(TirTable::for_variant(self.gpu, variant.tir)?);
         }
         ForwardPass::new(self.gpu, &self.layout, COLOR_FORMAT, variant)
     }
@@ -154,6 +165,7 @@ impl<'g> Renderer<'g> {
         }
         let device = &self.gpu.device;
         let table = &self.split_sums[&pass.variant.g2];
+        let tir = self.tir.as_ref().unwrap_or(&self.tir_unused);
         let view_proj = self.camera.view_proj(width as f32 / height as f32);
         let constants = FrameConstants {
             view_proj: view_proj.to_cols_array_2d(),
@@ -177,7 +189,11 @@ impl<'g> Renderer<'g> {
         set.write(0, Resource::Buffer(&uniforms))
             .write(1, Resource::Sampled(&self.environment.view, &self.sampler))
             .write(2, Resource::Sampled(&table.view, &self.sampler))
-            .write(3, Resource::Buffer(&material));
+            .write(3, Resource::Buffer(&material))
+            .write(
+                4,
+                Resource::Sampled(tir.view_for(pass.variant.tir), &self.sampler),
+            );
 
         let target = Image::new(
             device,

@@ -15,6 +15,7 @@ use std::path::{Component, Path, PathBuf};
 pub const HOST_DEFINES: &[(&str, u32)] = &[
     ("LAMINA_MAX_LAYERS_LIMIT", super::variant::MAX_LAYERS_LIMIT),
     ("LAMINA_LOCAL_SIZE_2D", crate::tables::LOCAL_SIZE_2D),
+    ("LAMINA_TIR_SIZE", crate::tables::tir::DEFAULT_SIZE),
 ];
 
 #[derive(Debug, thiserror::Error)]
@@ -35,6 +36,17 @@ pub fn source(path: &str) -> Option<&'static str> {
         .iter()
         .find(|(p, _)| *p == path)
         .map(|(_, s)| *s)
+}
+
+/// FNV-1a hash of every embedded GLSL file (path and text): changes whenever any shader or
+/// include changes, so tables cached on disk are rebuilt after a shader edit.
+pub fn sources_hash() -> u64 {
+    embedded::GLSL_FILES
+        .iter()
+        .flat_map(|(p, s)| p.bytes().chain([0]).chain(s.bytes()).chain([0]))
+        .fold(0xcbf2_9ce4_8422_2325, |h, b| {
+            (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+        })
 }
 
 /// Every entry point (file at the top of `glsl/`), sorted.

@@ -2,8 +2,10 @@
 //! split-sum (Karis) table. Each is generated on the GPU by a compute pass and has a CPU f64
 //! reference for spot checks.
 
+pub mod cache;
 pub mod environment;
 pub mod split_sum;
+pub mod tir;
 
 /// Work-group edge of lamina's 2-D compute passes (reaches GLSL as `LAMINA_LOCAL_SIZE_2D`).
 pub const LOCAL_SIZE_2D: u32 = 8;

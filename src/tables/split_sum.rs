@@ -39,6 +39,32 @@ pub struct SplitSumTable {
 }
 
 impl SplitSumTable {
+    /// The table from the disk cache ([`super::cache`]) when a valid one exists, else built and
+    /// stored there.
+    pub fn load_or_build(gpu: &Gpu, g2: G2, size: u32, samples: u32) -> Result<Self> {
+        let key = super::cache::Key {
+            kind: "split-sum",
+            params: vec![size, samples, crate::shader::variant::Axis::code(g2)],
+            shader_hash: crate::shader::sources_hash(),
+        };
+        let dir = super::cache::dir();
+        let count = (size * size * 2) as usize;
+        if let Some(values) = dir
+            .as_deref()
+            .and_then(|d| super::cache::load(d, &key, count))
+        {
+            let texels = values.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
+            return Self::from_texels(gpu, size, texels);
+        }
+        let table = Self::build(gpu, g2, size, samples)?;
+        if let Some(dir) = dir {
+            let flat: Vec<f32> = table.texels.iter().flatten().copied().collect();
+            // A cache that cannot be written costs a rebuild next time, nothing more.
+            let _ = super::cache::store(&dir, &key, &flat);
+        }
+        Ok(table)
+    }
+
     pub fn build(gpu: &Gpu, g2: G2, size: u32, samples: u32) -> Result<Self> {
         let spec = ShadeSpec {
             g2: crate::shader::variant::Axis::code(g2),
@@ -76,7 +102,12 @@ impl SplitSumTable {
             Ok(())
         })?;
         let texels: Vec<[f32; 2]> = buffer.read();
+        Self::from_texels(gpu, size, texels)
+    }
 
+    /// Uploads computed texels (row-major, row = roughness) as the half-float image.
+    pub fn from_texels(gpu: &Gpu, size: u32, texels: Vec<[f32; 2]>) -> Result<Self> {
+        let device = &gpu.device;
         let halves: Vec<f16> = texels.iter().flatten().map(|&v| f16::from_f32(v)).collect();
         let image = Image::new(
             device,

@@ -1,11 +1,68 @@
 // Total-internal-reflection correction (ALGORITHMS.md §4.5, §9), by the TIR_MODE constant.
-// The host accepts only `tir=none` until the TIR tables land (issue #6).
+// The including entry point declares the table:
+//   uniform sampler3D tir_table;   // n³, vertex-centred (μ, α, η), see tir_table.comp.glsl
+// Mirrors the Tir providers of src/model and src/tables/tir.rs.
 #ifndef LAMINA_LIB_TIR
 #define LAMINA_LIB_TIR
 
+#include "math.glsl"
+
+#define TIR_NONE 0u
+#define TIR_CONSTANT 1u
+#define TIR_ANALYTIC 2u
+#define TIR_LUT32 3u
+#define TIR_LUT16 4u
+
+// `tir=constant`: the talk's dummy constant, standing in for the fetch to measure its cost.
+const float TIR_CONSTANT_FRACTION = 0.1;
+
+// Exact unpolarised Fresnel reflectance of a dielectric interface of relative IOR η at
+// incidence cosine c (1 beyond the critical angle).
+float tir_fresnel_dielectric(float c, float eta) {
+    float ct2 = 1.0 - (1.0 - c * c) / (eta * eta);
+    if (ct2 <= 0.0) {
+        return 1.0;
+    }
+    float ct = sqrt(ct2);
+    float rs = (c - eta * ct) / (c + eta * ct);
+    float rp = (eta * c - ct) / (eta * c + ct);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+// The talk's naive analytic estimator (ALGORITHMS.md §9.2), kept as the port wrote it (the
+// Frostbite dominant-direction fit unclamped: it only overshoots, and the estimate is only
+// non-zero, at small α near normal incidence), except that the exit interface's IOR, which
+// tir_fraction does not receive, is taken as the same η.
+float tir_analytic(float mu, float alpha, float eta) {
+    float s = sin(0.25 * PI * (1.0 + mu));
+    vec3 wo = vec3(s, 0.0, sqrt(max(0.0, 1.0 - s * s)));
+    float a = max(alpha, 0.01);
+    float l = log(39.4115 - 39.0029 * a);
+    float f = pow(1.0 - mu, 10.8649) * (1.0 - 0.298475 * l) + 0.298475 * l;
+    vec3 m = mix(vec3(0.0, 0.0, 1.0), wo, f);
+    vec3 ws = 2.0 * dot(wo, m) * m - wo;
+    if (ws.z > 0.0) {
+        return 0.0;
+    }
+    float c = abs(ws.z);
+    float lambda = 0.5 * (-1.0 + sqrt(1.0 + a * a * (1.0 - c * c) / max(c * c, 1e-8)));
+    float g1 = 1.0 / (1.0 + lambda);
+    return tir_fresnel_dielectric(clamp(dot(wo, m), 0.0, 1.0), eta) * g1
+        * (1.0 - tir_fresnel_dielectric(wo.z, eta));
+}
+
 // Fraction of a lobe (incidence μ, roughness α) trapped by relative IOR η < 1.
 float tir_fraction(float mu, float alpha, float eta) {
-    return 0.0;
+    if (TIR_MODE == TIR_NONE) {
+        return 0.0;
+    } else if (TIR_MODE == TIR_CONSTANT) {
+        return TIR_CONSTANT_FRACTION;
+    } else if (TIR_MODE == TIR_ANALYTIC) {
+        return tir_analytic(mu, alpha, eta);
+    }
+    float n = float(LAMINA_TIR_SIZE);
+    vec3 x = clamp(vec3(mu, alpha, eta), 0.0, 1.0);
+    return textureLod(tir_table, (x * (n - 1.0) + 0.5) / n, 0.0).r;
 }
 
 #endif

@@ -1,0 +1,102 @@
+//! The on-disk cache of generated tables: `$LAMINA_CACHE/tables/` (default
+//! `~/.cache/lamina/tables/`), one file per table keyed by its kind, parameters and the hash of
+//! the embedded shaders. A file is trusted only when its header matches the key exactly and its
+//! length and checksum match its data; anything else (truncated, edited, from another shader
+//! version) is ignored and rebuilt.
+
+use std::path::{Path, PathBuf};
+
+const MAGIC: &[u8; 8] = b"LAMTAB01";
+
+/// What identifies a cached table.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Key {
+    pub kind: &'static str,
+    /// Size, sample count and anything else the values depend on.
+    pub params: Vec<u32>,
+    pub shader_hash: u64,
+}
+
+impl Key {
+    fn file_name(&self) -> String {
+        let params: Vec<String> = self.params.iter().map(u32::to_string).collect();
+        format!(
+            "{}-{}-{:016x}.bin",
+            self.kind,
+            params.join("x"),
+            self.shader_hash
+        )
+    }
+
+    fn header(&self, count: usize) -> Vec<u8> {
+        let mut out = MAGIC.to_vec();
+        out.extend((self.kind.len() as u32).to_le_bytes());
+        out.extend(self.kind.as_bytes());
+        out.extend((self.params.len() as u32).to_le_bytes());
+        for p in &self.params {
+            out.extend(p.to_le_bytes());
+        }
+        out.extend(self.shader_hash.to_le_bytes());
+        out.extend((count as u64).to_le_bytes());
+        out
+    }
+}
+
+/// The default cache directory; `None` when neither `LAMINA_CACHE` nor `HOME` is set.
+pub fn dir() -> Option<PathBuf> {
+    let base = std::env::var_os("LAMINA_CACHE")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache/lamina")))?;
+    Some(base.join("tables"))
+}
+
+fn checksum(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// The cached values of `key` in `dir`, if a valid file for exactly `count` values exists.
+pub fn load(dir: &Path, key: &Key, count: usize) -> Option<Vec<f32>> {
+    let path = dir.join(key.file_name());
+    let bytes = std::fs::read(path).ok()?;
+    let header = key.header(count);
+    let data_len = count * 4;
+    if bytes.len() != header.len() + data_len + 8 || bytes[..header.len()] != header[..] {
+        return None;
+    }
+    let data = &bytes[header.len()..header.len() + data_len];
+    let stored = u64::from_le_bytes(bytes[header.len() + data_len..].try_into().ok()?);
+    if stored != checksum(data) {
+        return None;
+    }
+    Some(
+        data.chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect(),
+    )
+}
+
+/// Stores `values` under `key` (atomically); a failure to write only costs a rebuild later,
+/// so it is reported to the caller and may be ignored.
+pub fn store(dir: &Path, key: &Key, values: &[f32]) -> crate::error::Result<PathBuf> {
+    std::fs::create_dir_all(dir).map_err(|e| crate::error::Error::Output {
+        path: dir.to_owned(),
+        message: e.to_string(),
+    })?;
+    let path = dir.join(key.file_name());
+    let mut bytes = key.header(values.len());
+    let data: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let sum = checksum(&data);
+    bytes.extend(&data);
+    bytes.extend(sum.to_le_bytes());
+    crate::imageio::write_atomically(&path, |temp| {
+        std::fs::write(temp, &bytes).map_err(|e| e.to_string())
+    })?;
+    Ok(path)
+}
+
+/// The file a key is cached in under `dir`.
+pub fn path_of(dir: &Path, key: &Key) -> PathBuf {
+    dir.join(key.file_name())
+}

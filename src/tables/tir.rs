@@ -1,0 +1,367 @@
+//! The TIR table (ALGORITHMS.md §6.3) behind `tir=lut32` and `tir=lut16`: for incidence cosine
+//! μ, roughness α and relative IOR η < 1, the fraction of a GGX reflection lobe that total
+//! internal reflection keeps inside the layer.
+//!
+//! n³ texels on a vertex-centred grid (texel (i, j, k) at μ = i/(n−1), α = j/(n−1),
+//! η = k/(n−1)), generated on the GPU by `tir_table.comp.glsl` and kept in two 3-D images: R32F
+//! (`lut32`) and R16F (`lut16`, the same values rounded to half floats). The shader samples with
+//! u = (x·(n−1) + ½)/n and a trilinear filter, which lands texel centres on the grid.
+//! [`cpu_reference`] integrates the same quantity in f64.
+
+use glam::DVec3;
+use half::f16;
+
+use std::path::Path;
+
+use crate::error::Result;
+use crate::gpu::{ComputeKernel, Gpu};
+use crate::model::microfacet;
+use crate::shader::{Tir, VariantKey, G2};
+use crate::tables::cache;
+use crate::vk::{
+    submit_and_wait, upload_image, Access, BindingKind, Buffer, BufferDesc, DescriptorSet, Format,
+    Image, ImageDesc, ImageState, ImageUsageFlags, ImageView, Resource,
+};
+
+/// 64³, the size of the reference's table.
+pub const DEFAULT_SIZE: u32 = 64;
+/// Hammersley samples per texel; the estimate is within ~2e-3 of the integral (tests/tables.rs).
+pub const DEFAULT_SAMPLES: u32 = 1024;
+/// Sampled by the shaders, uploaded, and read back by the tests.
+const TABLE_USAGE: ImageUsageFlags = ImageUsageFlags::from_raw(
+    ImageUsageFlags::SAMPLED.as_raw()
+        | ImageUsageFlags::TRANSFER_DST.as_raw()
+        | ImageUsageFlags::TRANSFER_SRC.as_raw(),
+);
+
+/// η slices per submission: the unit of progress.
+const SLICES_PER_SUBMIT: u32 = 8;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Push {
+    size: u32,
+    sample_count: u32,
+    z0: u32,
+}
+
+pub struct TirTable {
+    pub size: u32,
+    pub samples: u32,
+    /// The values the GPU computed, μ fastest, then α, then η.
+    pub texels: Vec<f32>,
+    /// R32_SFLOAT, in `FragmentRead` state.
+    pub image32: Image,
+    pub view32: ImageView,
+    /// R16_SFLOAT, the same values rounded to half floats.
+    pub image16: Image,
+    pub view16: ImageView,
+}
+
+impl TirTable {
+    /// The table from the disk cache when a valid one exists (`true`), else built on the GPU
+    /// and stored there; `progress(done, total)` follows the build in η slices.
+    pub fn load_or_build(
+        gpu: &Gpu,
+        size: u32,
+        samples: u32,
+        cache_dir: Option<&Path>,
+        progress: impl FnMut(u32, u32),
+    ) -> Result<(Self, bool)> {
+        let key = cache_key(size, samples);
+        let count = (size as usize).pow(3);
+        if let Some(texels) = cache_dir.and_then(|d| cache::load(d, &key, count)) {
+            return Ok((Self::from_texels(gpu, size, samples, texels)?, true));
+        }
+        let table = Self::build(gpu, size, samples, progress)?;
+        if let Some(dir) = cache_dir {
+            // A cache that cannot be written costs a rebuild next time, nothing more.
+            let _ = cache::store(dir, &key, &table.texels);
+        }
+        Ok((table, false))
+    }
+
+    /// Builds the table on the GPU (no cache).
+    pub fn build(
+        gpu: &Gpu,
+        size: u32,
+        samples: u32,
+        mut progress: impl FnMut(u32, u32),
+    ) -> Result<Self> {
+        if size < 2 {
+            return Err(crate::error::Error::Unsupported(format!(
+                "TIR table size {size}: at least 2 texels per axis"
+            )));
+        }
+        let kernel = ComputeKernel::new(
+            gpu,
+            "tir_table.comp.glsl",
+            &[BindingKind::StorageBuffer],
+            std::mem::size_of::<Push>() as u32,
+            &VariantKey::default().spec(),
+        )?;
+        let device = &gpu.device;
+        let count = u64::from(size).pow(3);
+        let buffer = Buffer::new(device, BufferDesc::readback(count * 4), "tir texels")?;
+        let mut set = DescriptorSet::new(device, &kernel.set_layout, "tir table")?;
+        set.write(0, Resource::Buffer(&buffer));
+        let mut z0 = 0;
+        while z0 < size {
+            let depth = SLICES_PER_SUBMIT.min(size - z0);
+            submit_and_wait(device, "tir table", |rec| {
+                rec.begin_label("tir table");
+                rec.bind_pipeline(&kernel.pipeline);
+                rec.bind_set(&kernel.pipeline, &kernel.layout, 0, &set);
+                rec.push_constants(
+                    &kernel.layout,
+                    &Push {
+                        size,
+                        sample_count: samples,
+                        z0,
+                    },
+                );
+                rec.dispatch(super::groups(size), super::groups(size), depth);
+                rec.barrier(Access::ComputeWrite, Access::HostRead);
+                rec.end_label();
+                Ok(())
+            })?;
+            z0 += depth;
+            progress(z0, size);
+        }
+        let texels: Vec<f32> = buffer.read();
+        Self::from_texels(gpu, size, samples, texels)
+    }
+
+    /// Uploads computed texels into the two images.
+    pub fn from_texels(gpu: &Gpu, size: u32, samples: u32, texels: Vec<f32>) -> Result<Self> {
+        let device = &gpu.device;
+        let image32 = Image::new(
+            device,
+            ImageDesc::new_3d(Format::R32_SFLOAT, size, size, size).usage(TABLE_USAGE),
+            "tir table lut32",
+        )?;
+        upload_image(
+            device,
+            &image32,
+            bytemuck::cast_slice(&texels),
+            ImageState::FragmentRead,
+        )?;
+        let halves: Vec<f16> = texels.iter().map(|&v| f16::from_f32(v)).collect();
+        let image16 = Image::new(
+            device,
+            ImageDesc::new_3d(Format::R16_SFLOAT, size, size, size).usage(TABLE_USAGE),
+            "tir table lut16",
+        )?;
+        upload_image(
+            device,
+            &image16,
+            bytemuck::cast_slice(&halves),
+            ImageState::FragmentRead,
+        )?;
+        Ok(Self {
+            view32: image32.view("tir table lut32")?,
+            view16: image16.view("tir table lut16")?,
+            image32,
+            image16,
+            size,
+            samples,
+            texels,
+        })
+    }
+
+    /// The table a variant samples: the real one (from the cache or built) for `lut32` and
+    /// `lut16`, else a 2³ table of zeros that only fills the descriptor.
+    pub fn for_variant(gpu: &Gpu, tir: Tir) -> Result<Self> {
+        if matches!(tir, Tir::Lut32 | Tir::Lut16) {
+            let dir = cache::dir();
+            Ok(Self::load_or_build(
+                gpu,
+                DEFAULT_SIZE,
+                DEFAULT_SAMPLES,
+                dir.as_deref(),
+                |_, _| {},
+            )?
+            .0)
+        } else {
+            Self::from_texels(gpu, 2, 0, vec![0.0; 8])
+        }
+    }
+
+    /// The image a variant samples (`lut16` the half-float one, anything else the f32 one).
+    pub fn view_for(&self, tir: Tir) -> &ImageView {
+        if tir == Tir::Lut16 {
+            &self.view16
+        } else {
+            &self.view32
+        }
+    }
+
+    pub fn texel(&self, i: u32, j: u32, k: u32) -> f32 {
+        let n = self.size;
+        self.texels[((k * n + j) * n + i) as usize]
+    }
+
+    /// (μ, α, η) at grid vertex (i, j, k).
+    pub fn coordinates(&self, i: u32, j: u32, k: u32) -> (f64, f64, f64) {
+        let step = 1.0 / f64::from(self.size - 1);
+        (
+            f64::from(i) * step,
+            f64::from(j) * step,
+            f64::from(k) * step,
+        )
+    }
+
+    /// The CPU twin of the shader's lookup: trilinear over the texels (rounded to half floats
+    /// for `half`), vertex-centred, clamped to the domain.
+    pub fn sample(&self, mu: f64, alpha: f64, eta: f64, half: bool) -> f64 {
+        let n = self.size as usize;
+        let value = |i: usize, j: usize, k: usize| {
+            let v = self.texels[(k * n + j) * n + i];
+            f64::from(if half { f16::from_f32(v).to_f32() } else { v })
+        };
+        let axis = |x: f64| {
+            let f = x.clamp(0.0, 1.0) * (n - 1) as f64;
+            let i0 = (f.floor() as usize).min(n - 2);
+            (i0, f - i0 as f64)
+        };
+        let (i, fx) = axis(mu);
+        let (j, fy) = axis(alpha);
+        let (k, fz) = axis(eta);
+        let lerp = |a: f64, b: f64, t: f64| a + (b - a) * t;
+        let plane = |k: usize| {
+            lerp(
+                lerp(value(i, j, k), value(i + 1, j, k), fx),
+                lerp(value(i, j + 1, k), value(i + 1, j + 1, k), fx),
+                fy,
+            )
+        };
+        lerp(plane(k), plane(k + 1), fz)
+    }
+}
+
+/// The disk-cache key of a TIR table: its size, sample count and the shaders' hash.
+pub fn cache_key(size: u32, samples: u32) -> cache::Key {
+    cache::Key {
+        kind: "tir",
+        params: vec![size, samples],
+        shader_hash: crate::shader::sources_hash(),
+    }
+}
+
+/// `tir=lut32` / `tir=lut16` as the GPU computes them.
+pub struct TableTir<'a> {
+    pub table: &'a TirTable,
+    pub half: bool,
+}
+
+impl crate::model::Tir for TableTir<'_> {
+    fn tir(&self, mu: f64, alpha: f64, eta: f64) -> f64 {
+        self.table.sample(mu, alpha, eta, self.half)
+    }
+}
+
+/// TIR(μ, α, η) in f64 by an `n`×`n` midpoint rule over the visible-normal sampler's two
+/// uniform variables (the same estimator as the GPU's, with a regular grid instead of
+/// Hammersley points).
+pub fn cpu_reference(mu: f64, alpha: f64, eta: f64, n: u32) -> f64 {
+    let mu = mu.max(1e-3);
+    let v = DVec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
+    let (mut trapped, mut total) = (0.0, 0.0);
+    for a in 0..n {
+        for b in 0..n {
+            let u = (
+                (f64::from(a) + 0.5) / f64::from(n),
+                (f64::from(b) + 0.5) / f64::from(n),
+            );
+            let h = microfacet::sample_vndf(v, u, alpha);
+            let o = microfacet::reflect(v, h);
+            if o.z <= 0.0 {
+                continue;
+            }
+            let w = if alpha > 0.0 {
+                microfacet::masking_g1(G2::Smith, o.z, alpha)
+            } else {
+                1.0
+            };
+            total += w;
+            if o.z * o.z < 1.0 - eta * eta {
+                trapped += w;
+            }
+        }
+    }
+    if total > 0.0 {
+        trapped / total
+    } else {
+        0.0
+    }
+}
+
+/// The CPU provider that matches what a variant's shader computes for `tir`: the table's twin
+/// for `lut32`/`lut16`, else the table-free modes of `model::tir`.
+pub fn provider(tir: Tir, table: &TirTable) -> Box<dyn crate::model::Tir + '_> {
+    use crate::model::tir::{AnalyticTir, ConstantTir, CONSTANT_FRACTION};
+    match tir {
+        Tir::None => Box::new(crate::model::NoTir),
+        Tir::Constant => Box::new(ConstantTir(CONSTANT_FRACTION)),
+        Tir::Analytic => Box::new(AnalyticTir),
+        Tir::Lut32 => Box::new(TableTir { table, half: false }),
+        Tir::Lut16 => Box::new(TableTir { table, half: true }),
+    }
+}
+
+/// How far an estimator is from the table over its grid.
+#[derive(Clone, Copy, Debug)]
+pub struct ErrorStats {
+    pub mse: f64,
+    pub mean_abs: f64,
+    pub max_abs: f64,
+    /// (μ, α, η) of the largest error.
+    pub worst_at: (f64, f64, f64),
+    pub points: usize,
+}
+
+/// `estimate` against the table at every grid vertex with 0 < η < 1 (the domain the model
+/// queries: a relative IOR is positive, and η = 1 has no TIR).
+pub fn error_against(table: &TirTable, estimate: &dyn crate::model::Tir) -> ErrorStats {
+    let n = table.size;
+    let (mut sum2, mut sum, mut max, mut worst, mut points) = (0.0, 0.0, 0.0, (0.0, 0.0, 0.0), 0);
+    for k in 1..n - 1 {
+        for j in 0..n {
+            for i in 0..n {
+                let (mu, alpha, eta) = table.coordinates(i, j, k);
+                let e = (estimate.tir(mu, alpha, eta) - f64::from(table.texel(i, j, k))).abs();
+                sum2 += e * e;
+                sum += e;
+                points += 1;
+                if e > max {
+                    max = e;
+                    worst = (mu, alpha, eta);
+                }
+            }
+        }
+    }
+    ErrorStats {
+        mse: sum2 / points as f64,
+        mean_abs: sum / points as f64,
+        max_abs: max,
+        worst_at: worst,
+        points,
+    }
+}
+
+/// The table in the reference's file format (ALGORITHMS.md §6): three int32 sizes, three
+/// (f32 min, f32 max) pairs, then the f32 values with μ fastest.
+pub fn reference_file_bytes(table: &TirTable) -> Vec<u8> {
+    let mut out = Vec::with_capacity(36 + table.texels.len() * 4);
+    for _ in 0..3 {
+        out.extend((table.size as i32).to_le_bytes());
+    }
+    for _ in 0..3 {
+        out.extend(0.0f32.to_le_bytes());
+        out.extend(1.0f32.to_le_bytes());
+    }
+    for v in &table.texels {
+        out.extend(v.to_le_bytes());
+    }
+    out
+}
