@@ -16,7 +16,8 @@ impl Tir for ConstantTir {
 }
 
 /// `tir=analytic`: the talk's naive estimator (ALGORITHMS.md §9.2), as the port wrote it, with
-/// the exit interface's IOR taken as the same η (the GLSL's deviation, kept identical here).
+/// the exit factor (1 − F(wo.z, η_10)) taken for an exit into air (factor 1; exact at the top
+/// interface), the GLSL's one deviation, kept identical here.
 pub struct AnalyticTir;
 
 fn fresnel_dielectric(c: f64, eta: f64) -> f64 {
@@ -46,7 +47,7 @@ impl Tir for AnalyticTir {
         let c = ws_z.abs();
         let lambda = 0.5 * (-1.0 + (1.0 + a * a * (1.0 - c * c) / (c * c).max(1e-8)).sqrt());
         let g1 = 1.0 / (1.0 + lambda);
-        fresnel_dielectric(wo_m.clamp(0.0, 1.0), eta) * g1 * (1.0 - fresnel_dielectric(wo[2], eta))
+        fresnel_dielectric(wo_m.clamp(0.0, 1.0), eta) * g1
     }
 }
 
@@ -57,7 +58,7 @@ mod tests {
     #[test]
     fn the_analytic_estimator_is_zero_over_most_of_the_domain() {
         // ALGORITHMS.md §9.2: non-zero only where the dominant-direction fit overshoots
-        // (small α near normal incidence).
+        // (small α, μ near 1, where the off-specular direction is near grazing).
         let mut nonzero = 0;
         let mut total = 0;
         for i in 0..=10 {

@@ -31,8 +31,9 @@ float tir_fresnel_dielectric(float c, float eta) {
 
 // The talk's naive analytic estimator (ALGORITHMS.md §9.2), kept as the port wrote it (the
 // Frostbite dominant-direction fit unclamped: it only overshoots, and the estimate is only
-// non-zero, at small α near normal incidence), except that the exit interface's IOR, which
-// tir_fraction does not receive, is taken as the same η.
+// non-zero, at small α near grazing reflection), except for its exit factor
+// (1 − F(wo.z, η_10)), η_10 = 1 / IOR of the layer above, which tir_fraction does not receive:
+// it is taken for an exit into air (η_10 = 1, factor 1), exact at the top interface.
 float tir_analytic(float mu, float alpha, float eta) {
     float s = sin(0.25 * PI * (1.0 + mu));
     vec3 wo = vec3(s, 0.0, sqrt(max(0.0, 1.0 - s * s)));
@@ -47,8 +48,7 @@ float tir_analytic(float mu, float alpha, float eta) {
     float c = abs(ws.z);
     float lambda = 0.5 * (-1.0 + sqrt(1.0 + a * a * (1.0 - c * c) / max(c * c, 1e-8)));
     float g1 = 1.0 / (1.0 + lambda);
-    return tir_fresnel_dielectric(clamp(dot(wo, m), 0.0, 1.0), eta) * g1
-        * (1.0 - tir_fresnel_dielectric(wo.z, eta));
+    return tir_fresnel_dielectric(clamp(dot(wo, m), 0.0, 1.0), eta) * g1;
 }
 
 // Fraction of a lobe (incidence μ, roughness α) trapped by relative IOR η < 1.
