@@ -124,11 +124,11 @@ fn zero_and_malformed_sizes_are_named() {
 
 #[test]
 fn unimplemented_axis_value_is_refused_before_writing() {
-    let dir = common::scratch_dir("cli-tir");
+    let dir = common::scratch_dir("cli-fgd");
     assert_rejected(
-        &["--variant", "tir=lut32"],
+        &["--variant", "fgd=belcour"],
         &dir,
-        &["tir", "not implemented"],
+        &["fgd", "not implemented", "issue #6"],
     );
 }
 
