@@ -18,6 +18,8 @@ layout(set = 0, binding = 3, std140) uniform Material {
     MaterialGpu material;
 };
 layout(set = 0, binding = 4) uniform sampler3D tir_table;
+layout(set = 0, binding = 5) uniform sampler3D fgd_table;
+layout(set = 0, binding = 6) uniform sampler2D fgd_belcour;
 
 #include "lib/ibl.glsl"
 #include "lib/tm2.glsl"

@@ -18,6 +18,8 @@ layout(set = 0, binding = 3, std430) writeonly buffer Results {
     vec4 values[];
 } results;
 layout(set = 0, binding = 4) uniform sampler3D tir_table;
+layout(set = 0, binding = 5) uniform sampler3D fgd_table;
+layout(set = 0, binding = 6) uniform sampler2D fgd_belcour;
 
 layout(push_constant) uniform Push {
     uint sample_count;

@@ -1,5 +1,7 @@
 //! The `lamina` command line: a thin layer over the library.
 
+mod tables_cli;
+
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::str::FromStr;
@@ -16,7 +18,6 @@ use lamina::output::{EvalReport, EvalSample};
 use lamina::profile::bench::{self, BenchConfig, Case};
 use lamina::profile::sweep::{self, CounterSetup};
 use lamina::profile::{counter, report};
-use lamina::render::forward::check_available;
 use lamina::render::Renderer;
 use lamina::render::{eval::GpuEvaluator, furnace, sheet};
 use lamina::shader::Model;
@@ -103,6 +104,7 @@ enum TableKind {
     /// Belcour, Bati & Barla 2020 4-channel table.
     FgdBelcour,
     /// The 64⁴ FGD table as a 64×64×4096 3-D image.
+    #[value(name = "fgd-4d")]
     Fgd4d,
     /// The talk's 64×64×2048 resampling of the 4-D table.
     FgdResampled,
@@ -129,6 +131,9 @@ struct TablesArgs {
     /// Build even when a valid cached table exists.
     #[arg(long)]
     rebuild: bool,
+    /// fgd-resampled: the κ filter of the table --out writes (every filter is measured).
+    #[arg(long, value_enum, default_value = "box")]
+    filter: lamina::tables::fgd::Filter,
 }
 
 #[derive(clap::Args)]
@@ -551,7 +556,6 @@ fn run_bench(cli: &Cli, args: &BenchArgs) -> Result<()> {
         .map(|k| {
             let variant = VariantKey::parse_over(k, base)?;
             stack.check_fits(variant.max_layers)?;
-            check_available(&variant)?;
             Ok(Case {
                 variant,
                 stack: stack.clone(),
@@ -796,10 +800,9 @@ fn run_tables(cli: &Cli, args: &TablesArgs) -> Result<()> {
             check_validation(&gpu)?;
             return Ok(());
         }
-        other => anyhow::bail!(
-            "{other:?}: this table is not built yet (the FGD tables of issue #6); \
-             available: fgd-karis, tir"
-        ),
+        TableKind::Fgd4d | TableKind::FgdResampled | TableKind::FgdBelcour => {
+            return tables_cli::run(&open_gpu(cli)?, args);
+        }
     }
     let gpu = open_gpu(cli)?;
     let samples = args.samples.unwrap_or(tir::DEFAULT_SAMPLES);
@@ -907,6 +910,8 @@ fn run_tables(cli: &Cli, args: &TablesArgs) -> Result<()> {
             title: "TIR: |analytic estimator − table|".into(),
             x_label: "μ (cos θ)".into(),
             y_label: "α".into(),
+            x_range: (0.0, 1.0),
+            y_range: (0.0, 1.0),
             panels,
             value_label: "absolute error".into(),
         }

@@ -123,16 +123,6 @@ fn zero_and_malformed_sizes_are_named() {
 }
 
 #[test]
-fn unimplemented_axis_value_is_refused_before_writing() {
-    let dir = common::scratch_dir("cli-fgd");
-    assert_rejected(
-        &["--variant", "fgd=belcour"],
-        &dir,
-        &["fgd", "not implemented", "issue #6"],
-    );
-}
-
-#[test]
 fn bad_material_file_is_named() {
     let dir = common::scratch_dir("cli-bad-material");
     let input = common::scratch_dir("cli-bad-material-input").join("typo.toml");

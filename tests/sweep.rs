@@ -200,7 +200,7 @@ fn every_committed_sweep_file_expands() {
     let dir = common::repo_path("profiling/sweeps");
     let (studies, suite) = sweep::load(&dir.join("reproduce.toml")).unwrap();
     assert!(suite);
-    assert!(studies.len() >= 6);
+    assert!(studies.len() >= 8);
     let static_size = studies
         .iter()
         .find(|s| s.name == "static-array-size")
@@ -222,13 +222,11 @@ fn every_committed_sweep_file_expands() {
         "fp16",
         "fp16-6flux",
         "tir",
+        "fgd",
         "g2",
         "flux",
         "growth",
     ] {
         sweep::load(&dir.join(format!("{name}.toml"))).unwrap();
     }
-    // The FGD study waits for issue #6's FGD tables and says so.
-    let e = sweep::load(&dir.join("fgd.toml")).unwrap_err().to_string();
-    assert!(e.contains("issue #6"), "{e}");
 }

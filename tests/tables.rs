@@ -1,5 +1,5 @@
-//! The TIR table: GPU values against the f64 reference, the 16-bit copy, the disk cache, and
-//! every TIR mode rendering every preset.
+//! The TIR table: GPU values against the f64 reference, the 16-bit copy, the disk cache; and
+//! every TIR mode and FGD table rendering every preset.
 
 mod common;
 
@@ -124,7 +124,7 @@ fn the_cache_is_keyed_and_never_trusts_a_broken_file() {
 }
 
 #[test]
-fn every_tir_mode_renders_every_preset_finite() {
+fn every_tir_and_fgd_value_renders_every_preset_finite() {
     let gpu = common::gpu();
     let env = EnvDesc {
         face_size: 32,
@@ -133,9 +133,14 @@ fn every_tir_mode_renders_every_preset_finite() {
     };
     let mut renderer = Renderer::new(&gpu, &common::studio(), env).unwrap();
     let stacks: Vec<Stack> = presets().iter().map(|p| Stack::load(p).unwrap()).collect();
+    // Each TIR mode with the Karis FGD, and each other FGD table with the TIR table.
+    let axes = ["none", "constant", "analytic", "lut32", "lut16"]
+        .map(|tir| format!("tir={tir},fgd=karis"))
+        .into_iter()
+        .chain(["belcour", "4d", "resampled4d"].map(|fgd| format!("tir=lut32,fgd={fgd}")));
     for model in ["tm2", "tm6"] {
-        for tir in ["none", "constant", "analytic", "lut32", "lut16"] {
-            let variant: VariantKey = format!("model={model},tir={tir},max_layers=5")
+        for axis in axes.clone() {
+            let variant: VariantKey = format!("model={model},{axis},max_layers=5")
                 .parse()
                 .unwrap();
             let pass = renderer.prepare(variant).unwrap();

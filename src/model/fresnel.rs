@@ -1,11 +1,11 @@
 //! Exact Fresnel reflectance (ALGORITHMS.md §10.5), unpolarised, relative IORs.
 
 /// Dielectric interface of relative IOR η = n_t/n_i at incidence cosine `c`; 1 under total
-/// internal reflection.
+/// internal reflection and for η = 0 (nothing to transmit into).
 pub fn dielectric(c: f64, eta: f64) -> f64 {
     let c = c.clamp(0.0, 1.0);
-    let ct2 = 1.0 - (1.0 - c * c) / (eta * eta);
-    if ct2 <= 0.0 {
+    let ct2 = 1.0 - (1.0 - c * c) / (eta * eta).max(1e-12);
+    if ct2 <= 0.0 || eta <= 0.0 {
         return 1.0;
     }
     let ct = ct2.sqrt();

@@ -355,6 +355,9 @@ pub struct HeatMap {
     pub title: String,
     pub x_label: String,
     pub y_label: String,
+    /// The axes' extents: cells divide them evenly.
+    pub x_range: (f64, f64),
+    pub y_range: (f64, f64),
     /// Each panel: its caption and `values[row][column]` (row 0 at the bottom).
     pub panels: Vec<(String, Vec<Vec<f64>>)>,
     /// What the colour bar measures.
@@ -381,7 +384,7 @@ fn ramp(t: f64) -> RGBColor {
 impl HeatMap {
     /// Writes the map as PNG (`path`), text drawn with the bundled font.
     pub fn write_png(&self, path: &Path) -> Result<()> {
-        let (width, height) = (260 * self.panels.len() as u32 + 140, 340);
+        let (width, height) = (300 * self.panels.len() as u32 + 140, 360);
         let mut canvas = Canvas::new(width, height);
         self.draw((&mut canvas).into_drawing_area())
             .map_err(|e| chart_error(path, e))?;
@@ -415,7 +418,10 @@ impl HeatMap {
                 .margin(8)
                 .x_label_area_size(36)
                 .y_label_area_size(40)
-                .build_cartesian_2d(0.0..1.0, 0.0..1.0)?;
+                .build_cartesian_2d(
+                    self.x_range.0..self.x_range.1,
+                    self.y_range.0..self.y_range.1,
+                )?;
             chart
                 .configure_mesh()
                 .disable_mesh()
@@ -426,10 +432,12 @@ impl HeatMap {
                 .label_style(("sans-serif", 12))
                 .axis_desc_style(("sans-serif", 13))
                 .draw()?;
-            let (dx, dy) = (1.0 / cols.max(1) as f64, 1.0 / rows.max(1) as f64);
+            let (x0, y0) = (self.x_range.0, self.y_range.0);
+            let dx = (self.x_range.1 - x0) / cols.max(1) as f64;
+            let dy = (self.y_range.1 - y0) / rows.max(1) as f64;
             chart.draw_series(values.iter().enumerate().flat_map(|(r, row)| {
                 row.iter().enumerate().map(move |(c, &v)| {
-                    let (x, y) = (c as f64 * dx, r as f64 * dy);
+                    let (x, y) = (x0 + c as f64 * dx, y0 + r as f64 * dy);
                     Rectangle::new([(x, y), (x + dx, y + dy)], ramp(v / scale).filled())
                 })
             }))?;

@@ -37,7 +37,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::material::Stack;
-use crate::render::forward::check_available;
 use crate::shader::variant::AXES;
 use crate::shader::VariantKey;
 
@@ -447,10 +446,6 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
                     path: file.to_owned(),
                     message: format!("variant `{key_text}`: {e}"),
                 })?;
-            check_available(&variant).map_err(|e| Error::Input {
-                path: file.to_owned(),
-                message: e.to_string(),
-            })?;
             if stack.layers.len() > variant.max_layers as usize {
                 skipped.push(format!("{} with {variant}", stack.name));
                 continue;

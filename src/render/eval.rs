@@ -6,6 +6,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::{Evaluation, LayerParams, Lobe};
 use crate::shader::{Model, VariantKey};
+use crate::tables::fgd::FgdImages;
 use crate::tables::split_sum::{self, SplitSumTable};
 use crate::tables::tir::TirTable;
 use crate::vk::{
@@ -13,7 +14,6 @@ use crate::vk::{
     Resource, Sampler, SamplerDesc,
 };
 
-use super::forward::check_available;
 use super::material::MaterialGpu;
 
 const LOCAL_SIZE: u32 = 64;
@@ -34,6 +34,8 @@ pub struct GpuEvaluator<'g> {
     pub table: SplitSumTable,
     /// The TIR table the shader samples (`tir=lut32`/`lut16`; zeros otherwise).
     pub tir: TirTable,
+    /// The FGD tables of `fgd` values other than `karis` (zeros for `karis`).
+    pub fgd: FgdImages,
     sampler: Sampler,
 }
 
@@ -44,7 +46,6 @@ impl<'g> GpuEvaluator<'g> {
                 "eval evaluates the transfer-matrix models; use model=tm2 or model=tm6".into(),
             ));
         }
-        check_available(&variant)?;
         if variant.fp16 && !gpu.device.supports_fp16() {
             return Err(Error::Unsupported(format!(
                 "fp16=on needs the shaderFloat16 feature, which `{}` lacks",
@@ -61,6 +62,8 @@ impl<'g> GpuEvaluator<'g> {
                 BindingKind::StorageBuffer,
                 BindingKind::StorageBuffer,
                 BindingKind::SampledImage,
+                BindingKind::SampledImage,
+                BindingKind::SampledImage,
             ],
             std::mem::size_of::<Push>() as u32,
             &variant.spec(),
@@ -72,6 +75,7 @@ impl<'g> GpuEvaluator<'g> {
             split_sum::DEFAULT_SAMPLES,
         )?;
         let tir = TirTable::for_variant(gpu, variant.tir)?;
+        let fgd = FgdImages::for_variant(gpu, variant.fgd, variant.g2)?;
         let sampler = Sampler::new(&gpu.device, SamplerDesc::linear_clamp(), "eval tables")?;
         Ok(Self {
             gpu,
@@ -79,6 +83,7 @@ impl<'g> GpuEvaluator<'g> {
             kernel,
             table,
             tir,
+            fgd,
             sampler,
         })
     }
@@ -133,7 +138,9 @@ impl<'g> GpuEvaluator<'g> {
             .write(
                 4,
                 Resource::Sampled(self.tir.view_for(self.variant.tir), &self.sampler),
-            );
+            )
+            .write(5, Resource::Sampled(&self.fgd.volume_view, &self.sampler))
+            .write(6, Resource::Sampled(&self.fgd.plane_view, &self.sampler));
         let count = cosines.len() as u32;
         submit_and_wait(device, "eval", |rec| {
             rec.bind_pipeline(&self.kernel.pipeline);

@@ -2,29 +2,13 @@
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
-use crate::shader::{Fgd, VariantKey};
+use crate::shader::VariantKey;
 use crate::vk::{Format, GraphicsDesc, Pipeline, PipelineLayout};
 
 use super::scene::Vertex;
 
 /// The entry points compiled per variant (the only ones that see the variant's defines).
 pub const ENTRIES: [&str; 2] = ["forward.vert.glsl", "forward.frag.glsl"];
-
-/// Refuses the axis values whose shader code or tables do not exist yet, naming the issue
-/// that brings them.
-pub fn check_available(variant: &VariantKey) -> Result<()> {
-    let missing = if variant.fgd != Fgd::Karis {
-        Some("fgd other than `karis` (the FGD tables, issue #6)")
-    } else {
-        None
-    };
-    match missing {
-        Some(what) => Err(Error::Unsupported(format!(
-            "variant {variant}: {what} is not implemented yet"
-        ))),
-        None => Ok(()),
-    }
-}
 
 pub struct ForwardPass {
     pub variant: VariantKey,
@@ -40,7 +24,6 @@ impl ForwardPass {
         color_format: Format,
         variant: VariantKey,
     ) -> Result<Self> {
-        check_available(&variant)?;
         if variant.fp16 && !gpu.device.supports_fp16() {
             return Err(Error::Unsupported(format!(
                 "fp16=on needs the shaderFloat16 feature, which `{}` lacks",

@@ -12,8 +12,9 @@ use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
 use crate::model::LayerParams;
-use crate::shader::{Tir, VariantKey, G2};
+use crate::shader::{Fgd, Tir, VariantKey, G2};
 use crate::tables::environment::{EnvDesc, Environment};
+use crate::tables::fgd::FgdImages;
 use crate::tables::split_sum::{self, SplitSumTable};
 use crate::tables::tir::TirTable;
 use crate::vk::{
@@ -56,6 +57,8 @@ pub struct Renderer<'g> {
     tir: Option<TirTable>,
     /// Zeros bound in place of the TIR table for the other variants.
     tir_unused: TirTable,
+    /// The FGD tables per (fgd, G2), built when a variant needing them is prepared.
+    fgd_tables: HashMap<(Fgd, G2), FgdImages>,
     set_layout: DescriptorSetLayout,
     layout: PipelineLayout,
     sampler: Sampler,
@@ -77,6 +80,8 @@ impl<'g> Renderer<'g> {
                 BindingKind::SampledImage,
                 BindingKind::SampledImage,
                 BindingKind::UniformBuffer,
+                BindingKind::SampledImage,
+                BindingKind::SampledImage,
                 BindingKind::SampledImage,
             ],
             Stages::Graphics,
@@ -104,6 +109,7 @@ impl<'g> Renderer<'g> {
             split_sums: HashMap::new(),
             tir: None,
             tir_unused: TirTable::for_variant(gpu, Tir::None)?,
+            fgd_tables: HashMap::new(),
             set_layout,
             layout,
             sampler,
@@ -115,7 +121,7 @@ impl<'g> Renderer<'g> {
         })
     }
 
-    /// Compiles and builds the pipeline of `variant` (and the split-sum table its G2 needs).
+    /// Compiles and builds the pipeline of `variant` (and the tables it samples).
     pub fn prepare(&mut self, variant: VariantKey) -> Result<ForwardPass> {
         if !self.split_sums.contains_key(&variant.g2) {
             let table = SplitSumTable::load_or_build(
@@ -128,6 +134,11 @@ impl<'g> Renderer<'g> {
         }
         if matches!(variant.tir, Tir::Lut32 | Tir::Lut16) && self.tir.is_none() {
             self.tir = Some(TirTable::for_variant(self.gpu, variant.tir)?);
+        }
+        let key = (variant.fgd, variant.g2);
+        if !self.fgd_tables.contains_key(&key) {
+            let images = FgdImages::for_variant(self.gpu, variant.fgd, variant.g2)?;
+            self.fgd_tables.insert(key, images);
         }
         ForwardPass::new(self.gpu, &self.layout, COLOR_FORMAT, variant)
     }
@@ -166,6 +177,12 @@ impl<'g> Renderer<'g> {
         let device = &self.gpu.device;
         let table = &self.split_sums[&pass.variant.g2];
         let tir = self.tir.as_ref().unwrap_or(&self.tir_unused);
+        let fgd = self
+            .fgd_tables
+            .get(&(pass.variant.fgd, pass.variant.g2))
+            .ok_or_else(|| {
+                Error::Unsupported(format!("variant {} was not prepared", pass.variant))
+            })?;
         let view_proj = self.camera.view_proj(width as f32 / height as f32);
         let constants = FrameConstants {
             view_proj: view_proj.to_cols_array_2d(),
@@ -193,7 +210,9 @@ impl<'g> Renderer<'g> {
             .write(
                 4,
                 Resource::Sampled(tir.view_for(pass.variant.tir), &self.sampler),
-            );
+            )
+            .write(5, Resource::Sampled(&fgd.volume_view, &self.sampler))
+            .write(6, Resource::Sampled(&fgd.plane_view, &self.sampler));
 
         let target = Image::new(
             device,

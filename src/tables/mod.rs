@@ -1,9 +1,12 @@
-//! Precomputed tables the shading passes sample: the GGX-prefiltered environment and the
-//! split-sum (Karis) table. Each is generated on the GPU by a compute pass and has a CPU f64
+//! Precomputed tables the shading passes sample: the GGX-prefiltered environment, the
+//! split-sum (Karis) table, the other FGD tables and the TIR table. Each is generated on the GPU by a compute pass and has a CPU f64
 //! reference for spot checks.
 
+pub mod belcour;
 pub mod cache;
 pub mod environment;
+pub mod fgd;
+pub mod fgd_study;
 pub mod split_sum;
 pub mod tir;
 

@@ -1,23 +1,98 @@
 // Directional albedo FGD(μ, α, η, κ) of a rough interface, from the table the FGD_MODE
 // constant selects. The including entry point declares the tables:
-//   uniform sampler2D split_sum;   // fgd = karis: (A, B) at (μ, √α), see split_sum.comp.glsl
-// Mirrors the providers of src/model/fgd.rs.
+//   uniform sampler2D split_sum;     // karis: (A, B) at (μ, √α), see split_sum.comp.glsl
+//   uniform sampler3D fgd_table;     // 4d: 64×64×4096, resampled4d: 64×64×2048,
+//                                    // belcour: the 64³ dielectric table over η < 1
+//   uniform sampler2D fgd_belcour;   // belcour: the folded 4-channel table
+// Mirrors the providers of src/tables/fgd.rs.
 #ifndef LAMINA_LIB_FGD
 #define LAMINA_LIB_FGD
 
 #include "fresnel.glsl"
+#include "../shared/variant.glsl"
 
-// Karis 2013 split sum: F0·A + B with F0 from the complex IOR (exact at normal incidence, a
-// Schlick-shaped approximation elsewhere, no total internal reflection).
-vec3 fgd_rgb(float mu, float alpha, vec3 eta, vec3 kappa) {
+#define FGD_KARIS 0u
+#define FGD_BELCOUR 1u
+#define FGD_4D 2u
+#define FGD_RESAMPLED 3u
+
+// Texels per axis of the vertex-centred grids (the host builds them at this size).
+const float FGD_N = float(LAMINA_FGD_SIZE);
+// The 4-D table's domain in η and κ: [0, 4] each (ALGORITHMS.md §6.1); beyond it, clamped.
+const float FGD_ETA_MAX = 4.0;
+const float FGD_KAPPA_MAX = 4.0;
+// The cosines where the Belcour projection interpolates F exactly (ALGORITHMS.md §7.2).
+const float BELCOUR_CT1 = 128.0 / 999.0;
+const float BELCOUR_CT2 = 432.0 / 999.0;
+
+// Normalised coordinate of x ∈ [0, 1] on a vertex-centred grid of FGD_N texels.
+float fgd_grid(float x) {
+    return (clamp(x, 0.0, 1.0) * (FGD_N - 1.0) + 0.5) / FGD_N;
+}
+
+// The 4-D table stacked as (μ, α, η + N·κ-slice): two hardware-trilinear fetches in the κ
+// slices around κ and a lerp between them. `resampled4d` holds N/2 slices, slice m filtered
+// around the original κ index 2m + ½ (src/tables/fgd.rs).
+float fgd_stacked(float mu, float alpha, float eta, float kappa) {
+    vec2 xy = vec2(fgd_grid(mu), fgd_grid(alpha));
+    float fe = clamp(eta / FGD_ETA_MAX, 0.0, 1.0) * (FGD_N - 1.0);
+    float fk = clamp(kappa / FGD_KAPPA_MAX, 0.0, 1.0) * (FGD_N - 1.0);
+    float slices = FGD_N;
+    float g = fk;
+    if (FGD_MODE == FGD_RESAMPLED) {
+        slices = 0.5 * FGD_N;
+        g = clamp(0.5 * (fk - 0.5), 0.0, slices - 1.0);
+    }
+    float s0 = min(floor(g), slices - 2.0);
+    float depth = slices * FGD_N;
+    float z0 = (s0 * FGD_N + fe + 0.5) / depth;
+    float a = texture(fgd_table, vec3(xy, z0)).r;
+    float b = texture(fgd_table, vec3(xy, z0 + FGD_N / depth)).r;
+    return mix(a, b, g - s0);
+}
+
+// Belcour et al. 2020 with the projection folded into the table: F(1)·P0 + P1 + F(ct1)·P2 +
+// F(ct2)·P3. The basis has no total internal reflection, so a dielectric interface with
+// η < 1 reads the dedicated (μ, α, η) table instead.
+float fgd_belcour_channel(float mu, float alpha, float eta, float kappa) {
+    if (kappa <= 0.0 && eta < 1.0) {
+        return texture(fgd_table, vec3(fgd_grid(mu), fgd_grid(alpha), fgd_grid(eta))).r;
+    }
+    vec4 p = texture(fgd_belcour, vec2(mu, sqrt(alpha)));
+    float k2 = kappa * kappa;
+    float f0 = ((eta - 1.0) * (eta - 1.0) + k2) / ((eta + 1.0) * (eta + 1.0) + k2);
+    return f0 * p.x + p.y + fresnel_conductor(BELCOUR_CT1, eta, kappa) * p.z
+        + fresnel_conductor(BELCOUR_CT2, eta, kappa) * p.w;
+}
+
+// One channel: relative complex IOR η + iκ (κ = 0 for a dielectric).
+float fgd_channel(float mu, float alpha, float eta, float kappa) {
+    if (FGD_MODE == FGD_BELCOUR) {
+        return fgd_belcour_channel(mu, alpha, eta, kappa);
+    } else if (FGD_MODE == FGD_4D || FGD_MODE == FGD_RESAMPLED) {
+        return fgd_stacked(mu, alpha, eta, kappa);
+    }
+    // Karis 2013 split sum: F0·A + B with F0 from the complex IOR (exact at normal incidence,
+    // a Schlick-shaped approximation elsewhere, no total internal reflection).
     vec2 ab = texture(split_sum, vec2(mu, sqrt(alpha))).rg;
-    return f0_complex(eta, kappa) * ab.x + ab.y;
+    float k2 = kappa * kappa;
+    float f0 = ((eta - 1.0) * (eta - 1.0) + k2) / ((eta + 1.0) * (eta + 1.0) + k2);
+    return f0 * ab.x + ab.y;
+}
+
+vec3 fgd_rgb(float mu, float alpha, vec3 eta, vec3 kappa) {
+    if (FGD_MODE == FGD_KARIS) {
+        vec2 ab = texture(split_sum, vec2(mu, sqrt(alpha))).rg;
+        return f0_complex(eta, kappa) * ab.x + ab.y;
+    }
+    return vec3(
+        fgd_channel(mu, alpha, eta.r, kappa.r),
+        fgd_channel(mu, alpha, eta.g, kappa.g),
+        fgd_channel(mu, alpha, eta.b, kappa.b));
 }
 
 float fgd_dielectric(float mu, float alpha, float eta) {
-    vec2 ab = texture(split_sum, vec2(mu, sqrt(alpha))).rg;
-    float f0 = (eta - 1.0) * (eta - 1.0) / ((eta + 1.0) * (eta + 1.0));
-    return f0 * ab.x + ab.y;
+    return fgd_channel(mu, alpha, eta, 0.0);
 }
 
 #endif

@@ -6,6 +6,7 @@
 #define LAMINA_LIB_TIR
 
 #include "math.glsl"
+#include "fresnel.glsl"
 
 #define TIR_NONE 0u
 #define TIR_CONSTANT 1u
@@ -15,19 +16,6 @@
 
 // `tir=constant`: the talk's dummy constant, standing in for the fetch to measure its cost.
 const float TIR_CONSTANT_FRACTION = 0.1;
-
-// Exact unpolarised Fresnel reflectance of a dielectric interface of relative IOR η at
-// incidence cosine c (1 beyond the critical angle).
-float tir_fresnel_dielectric(float c, float eta) {
-    float ct2 = 1.0 - (1.0 - c * c) / (eta * eta);
-    if (ct2 <= 0.0) {
-        return 1.0;
-    }
-    float ct = sqrt(ct2);
-    float rs = (c - eta * ct) / (c + eta * ct);
-    float rp = (eta * c - ct) / (eta * c + ct);
-    return 0.5 * (rs * rs + rp * rp);
-}
 
 // The talk's naive analytic estimator (ALGORITHMS.md §9.2), kept as the port wrote it (the
 // Frostbite dominant-direction fit unclamped: it only overshoots, and the estimate is only
@@ -48,7 +36,7 @@ float tir_analytic(float mu, float alpha, float eta) {
     float c = abs(ws.z);
     float lambda = 0.5 * (-1.0 + sqrt(1.0 + a * a * (1.0 - c * c) / max(c * c, 1e-8)));
     float g1 = 1.0 / (1.0 + lambda);
-    return tir_fresnel_dielectric(clamp(dot(wo, m), 0.0, 1.0), eta) * g1;
+    return fresnel_dielectric(clamp(dot(wo, m), 0.0, 1.0), eta) * g1;
 }
 
 // Fraction of a lobe (incidence μ, roughness α) trapped by relative IOR η < 1.

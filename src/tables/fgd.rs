@@ -1,0 +1,694 @@
+//! The FGD tables behind the `fgd` axis's values other than `karis` (ALGORITHMS.md §6.1, §7):
+//!
+//! - `fgd=4d`: FGD(μ, α, η, κ) on the reference's 64⁴ vertex-centred grid over
+//!   [0, 1]² × [0, 4]², stacked as one 64×64×4096 R32F 3-D image (Vulkan guarantees only
+//!   2048 texels of depth; lavapipe and desktop GPUs offer 4096 or more — checked at load).
+//! - `fgd=resampled4d`: the talk's D3D12 workaround, 64×64×2048: the κ axis filtered down to
+//!   32 slices ([`Filter`], box by default) and stacked onto η.
+//! - `fgd=belcour`: the 4-channel table of Belcour et al. 2020 with the projection folded in
+//!   ([`super::belcour`]), plus a 64³ dielectric table over η ∈ [0, 1] for the interfaces the
+//!   decomposition cannot represent (light leaving a denser layer: no total internal
+//!   reflection in its basis, ALGORITHMS.md §7.5).
+//!
+//! The grids are computed on the GPU by `fgd_table.comp.glsl` and `fgd_belcour.comp.glsl`,
+//! cached on disk ([`super::cache`]), and sampled by `lib/fgd.glsl`; [`FgdProbe`] samples
+//! them at arbitrary points exactly as the shaders do.
+
+use std::path::Path;
+
+use glam::DVec3;
+
+use crate::error::{Error, Result};
+use crate::gpu::{ComputeKernel, Gpu};
+use crate::model::microfacet;
+use crate::shader::{Fgd, VariantKey, G2};
+use crate::tables::belcour::Basis;
+use crate::tables::cache;
+use crate::tables::split_sum::SplitSumTable;
+use crate::vk::{
+    submit_and_wait, upload_image, Access, BindingKind, Buffer, BufferDesc, BufferUsageFlags,
+    DescriptorSet, Format, Image, ImageDesc, ImageState, ImageView, Resource, Sampler, SamplerDesc,
+};
+
+/// Texels per axis of every FGD grid (the reference's 64; `LAMINA_FGD_SIZE` in GLSL).
+pub const SIZE: u32 = 64;
+/// Hammersley samples per texel of the 4-D and η < 1 grids: they resolve the step of F at
+/// the critical angle (η < 1) to ~5e-4 (256 samples: 5e-3; tests/fgd.rs). The build shader
+/// holds at most 1024 in shared memory.
+pub const GRID_SAMPLES: u32 = 1024;
+/// Samples per texel of the Belcour table (64² texels: cheap).
+pub const BELCOUR_SAMPLES: u32 = 4096;
+/// The 4-D table's domain in η and κ.
+pub const ETA_MAX: f64 = 4.0;
+pub const KAPPA_MAX: f64 = 4.0;
+/// Depth of the stacked 4-D image: `fgd=4d` needs `maxImageDimension3D` at least this.
+pub const FULL_DEPTH: u32 = SIZE * SIZE;
+const MAX_GRID_SAMPLES: u32 = 1024;
+/// κ slices per submission: the unit of progress.
+const SLICES_PER_SUBMIT: u32 = 4;
+
+/// A vertex-centred grid over (μ, α, η, κ): μ, α ∈ [0, 1]; η and κ over their ranges.
+/// Texels are μ fastest, then α, η, κ (the layout of the stacked 3-D images).
+pub struct Grid {
+    pub dims: [u32; 4],
+    pub eta: (f64, f64),
+    pub kappa: (f64, f64),
+    pub samples: u32,
+    pub texels: Vec<f32>,
+}
+
+impl Grid {
+    pub fn index(&self, i: u32, j: u32, k: u32, l: u32) -> usize {
+        let [nm, na, ne, _] = self.dims;
+        (((l * ne + k) * na + j) * nm + i) as usize
+    }
+
+    pub fn texel(&self, i: u32, j: u32, k: u32, l: u32) -> f32 {
+        self.texels[self.index(i, j, k, l)]
+    }
+
+    /// (μ, α, η, κ) at vertex (i, j, k, l); μ = 0 is evaluated at 1e-3 by the build.
+    pub fn coordinates(&self, i: u32, j: u32, k: u32, l: u32) -> [f64; 4] {
+        let at = |index: u32, n: u32, (lo, hi): (f64, f64)| {
+            if n > 1 {
+                lo + (hi - lo) * f64::from(index) / f64::from(n - 1)
+            } else {
+                lo
+            }
+        };
+        [
+            at(i, self.dims[0], (0.0, 1.0)),
+            at(j, self.dims[1], (0.0, 1.0)),
+            at(k, self.dims[2], self.eta),
+            at(l, self.dims[3], self.kappa),
+        ]
+    }
+}
+
+/// The kinds of grid lamina builds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GridKind {
+    /// 64⁴ over η, κ ∈ [0, 4].
+    Full4d,
+    /// 64³ over η ∈ [0, 1], κ = 0 (belcour's fallback).
+    DielectricBelow1,
+}
+
+impl GridKind {
+    fn dims(self, n: u32) -> [u32; 4] {
+        match self {
+            Self::Full4d => [n; 4],
+            Self::DielectricBelow1 => [n, n, n, 1],
+        }
+    }
+
+    fn ranges(self) -> ((f64, f64), (f64, f64)) {
+        match self {
+            Self::Full4d => ((0.0, ETA_MAX), (0.0, KAPPA_MAX)),
+            Self::DielectricBelow1 => ((0.0, 1.0), (0.0, 0.0)),
+        }
+    }
+
+    /// Its name in messages and in the disk cache.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Full4d => "fgd-4d",
+            Self::DielectricBelow1 => "fgd-dielectric-below-1",
+        }
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GridPush {
+    dims: [u32; 4],
+    range: [f32; 4],
+    sample_count: u32,
+    l0: u32,
+    pad: [u32; 2],
+}
+
+/// The disk-cache key of a grid.
+pub fn grid_cache_key(kind: GridKind, g2: G2, n: u32, samples: u32) -> cache::Key {
+    cache::Key {
+        kind: kind.name(),
+        params: vec![n, samples, crate::shader::variant::Axis::code(g2)],
+        shader_hash: crate::shader::sources_hash(),
+    }
+}
+
+/// The grid from the disk cache when a valid one exists (`true`), else built on the GPU and
+/// stored; `progress(done, total)` follows the build in κ slices.
+pub fn load_or_build_grid(
+    gpu: &Gpu,
+    kind: GridKind,
+    g2: G2,
+    n: u32,
+    samples: u32,
+    cache_dir: Option<&Path>,
+    progress: impl FnMut(u32, u32),
+) -> Result<(Grid, bool)> {
+    let key = grid_cache_key(kind, g2, n, samples);
+    let dims = kind.dims(n);
+    let (eta, kappa) = kind.ranges();
+    let count = dims.iter().map(|&d| d as usize).product();
+    if let Some(texels) = cache_dir.and_then(|d| cache::load(d, &key, count)) {
+        let grid = Grid {
+            dims,
+            eta,
+            kappa,
+            samples,
+            texels,
+        };
+        return Ok((grid, true));
+    }
+    let grid = build_grid(gpu, kind, g2, n, samples, progress)?;
+    if let Some(dir) = cache_dir {
+        // A cache that cannot be written costs a rebuild next time, nothing more.
+        let _ = cache::store(dir, &key, &grid.texels);
+    }
+    Ok((grid, false))
+}
+
+/// Builds a grid on the GPU (no cache).
+pub fn build_grid(
+    gpu: &Gpu,
+    kind: GridKind,
+    g2: G2,
+    n: u32,
+    samples: u32,
+    mut progress: impl FnMut(u32, u32),
+) -> Result<Grid> {
+    if !(2..=256).contains(&n) || !(1..=MAX_GRID_SAMPLES).contains(&samples) {
+        return Err(Error::Unsupported(format!(
+            "FGD grid of {n} texels per axis and {samples} samples: allowed 2..=256 texels and \
+             1..={MAX_GRID_SAMPLES} samples"
+        )));
+    }
+    let dims = kind.dims(n);
+    let (eta, kappa) = kind.ranges();
+    let spec = VariantKey {
+        g2,
+        ..VariantKey::default()
+    }
+    .spec();
+    let kernel = ComputeKernel::new(
+        gpu,
+        "fgd_table.comp.glsl",
+        &[BindingKind::StorageBuffer],
+        std::mem::size_of::<GridPush>() as u32,
+        &spec,
+    )?;
+    let device = &gpu.device;
+    let count: u64 = dims.iter().map(|&d| u64::from(d)).product();
+    let buffer = Buffer::new(device, BufferDesc::readback(count * 4), "fgd grid texels")?;
+    let mut set = DescriptorSet::new(device, &kernel.set_layout, "fgd grid")?;
+    set.write(0, Resource::Buffer(&buffer));
+    let slices = dims[3];
+    let mut l0 = 0;
+    while l0 < slices {
+        let depth = SLICES_PER_SUBMIT.min(slices - l0);
+        submit_and_wait(device, "fgd grid", |rec| {
+            rec.begin_label("fgd grid");
+            rec.bind_pipeline(&kernel.pipeline);
+            rec.bind_set(&kernel.pipeline, &kernel.layout, 0, &set);
+            rec.push_constants(
+                &kernel.layout,
+                &GridPush {
+                    dims,
+                    range: [eta.0 as f32, eta.1 as f32, kappa.0 as f32, kappa.1 as f32],
+                    sample_count: samples,
+                    l0,
+                    pad: [0; 2],
+                },
+            );
+            rec.dispatch(dims[2].div_ceil(64), dims[0], dims[1] * depth);
+            rec.barrier(Access::ComputeWrite, Access::HostRead);
+            rec.end_label();
+            Ok(())
+        })?;
+        l0 += depth;
+        progress(l0, slices);
+    }
+    Ok(Grid {
+        dims,
+        eta,
+        kappa,
+        samples,
+        texels: buffer.read(),
+    })
+}
+
+/// How `fgd=resampled4d` brings the κ axis from n to n/2 slices. Slice m stands for the
+/// original κ index 2m + ½ (so the shader's index arithmetic is the same for every filter);
+/// the filters weigh the original slices 2m − 1, 2m, 2m + 1, 2m + 2 (clamped at the edges).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Filter {
+    /// ½, ½: the mean of the two slices (the talk's best).
+    Box,
+    /// ⅛, ⅜, ⅜, ⅛: a triangle twice as wide.
+    Tent,
+    /// −1/16, 9/16, 9/16, −1/16: Catmull–Rom interpolation at the midpoint.
+    CatmullRom,
+}
+
+impl Filter {
+    pub const ALL: [Filter; 3] = [Filter::Box, Filter::Tent, Filter::CatmullRom];
+
+    fn weights(self) -> [f64; 4] {
+        match self {
+            Self::Box => [0.0, 0.5, 0.5, 0.0],
+            Self::Tent => [0.125, 0.375, 0.375, 0.125],
+            Self::CatmullRom => [-0.0625, 0.5625, 0.5625, -0.0625],
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Box => "box",
+            Self::Tent => "tent",
+            Self::CatmullRom => "catmull-rom",
+        }
+    }
+}
+
+/// The resampled table of a 4-D grid: n/2 κ slices, texels laid out as the grid's.
+pub fn resample(grid: &Grid, filter: Filter) -> Vec<f32> {
+    let [nm, na, ne, nk] = grid.dims;
+    let slice = (nm * na * ne) as usize;
+    let w = filter.weights();
+    let mut out = vec![0.0f32; slice * (nk / 2) as usize];
+    for m in 0..nk / 2 {
+        let sources: Vec<usize> = (0..4)
+            .map(|t| (2 * m as i64 - 1 + t).clamp(0, i64::from(nk) - 1) as usize)
+            .collect();
+        let dst = &mut out[m as usize * slice..(m as usize + 1) * slice];
+        for (x, d) in dst.iter_mut().enumerate() {
+            let v: f64 = (0..4)
+                .map(|t| w[t] * f64::from(grid.texels[sources[t] * slice + x]))
+                .sum();
+            *d = v as f32;
+        }
+    }
+    out
+}
+
+/// The CPU twin of the shader's κ lookup in a resampled table, at the grid's own η and
+/// (μ, α) vertices: the value `fgd=resampled4d` returns at κ = `kappa`.
+pub fn resampled_at(grid: &Grid, resampled: &[f32], i: u32, j: u32, k: u32, kappa: f64) -> f64 {
+    let [_, _, _, nk] = grid.dims;
+    let slices = f64::from(nk / 2);
+    let fk = (kappa / grid.kappa.1).clamp(0.0, 1.0) * f64::from(nk - 1);
+    let g = (0.5 * (fk - 0.5)).clamp(0.0, slices - 1.0);
+    let s0 = g.floor().min(slices - 2.0);
+    let at = |s: f64| f64::from(resampled[grid.index(i, j, k, s as u32)]);
+    at(s0) + (at(s0 + 1.0) - at(s0)) * (g - s0)
+}
+
+/// The Belcour table: the four integrals L_k per texel (`raw`) and the basis they came from.
+pub struct BelcourTable {
+    pub size: u32,
+    pub samples: u32,
+    pub basis: Basis,
+    /// L0..L3 at μ = (i + ½)/n, √α = (j + ½)/n, row-major (row = √α).
+    pub raw: Vec<[f32; 4]>,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct BelcourPush {
+    size: u32,
+    sample_count: u32,
+    basis_points: u32,
+}
+
+impl BelcourTable {
+    /// From the disk cache when valid, else built on the GPU and stored.
+    pub fn load_or_build(
+        gpu: &Gpu,
+        g2: G2,
+        size: u32,
+        samples: u32,
+        cache_dir: Option<&Path>,
+    ) -> Result<(Self, bool)> {
+        let key = cache::Key {
+            kind: "fgd-belcour",
+            params: vec![size, samples, crate::shader::variant::Axis::code(g2)],
+            shader_hash: crate::shader::sources_hash(),
+        };
+        let basis = Basis::fit();
+        let count = (size * size * 4) as usize;
+        if let Some(values) = cache_dir.and_then(|d| cache::load(d, &key, count)) {
+            let raw = values
+                .chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], c[3]])
+                .collect();
+            return Ok((
+                Self {
+                    size,
+                    samples,
+                    basis,
+                    raw,
+                },
+                true,
+            ));
+        }
+        let table = Self::build(gpu, g2, size, samples, basis)?;
+        if let Some(dir) = cache_dir {
+            let flat: Vec<f32> = table.raw.iter().flatten().copied().collect();
+            let _ = cache::store(dir, &key, &flat);
+        }
+        Ok((table, false))
+    }
+
+    pub fn build(gpu: &Gpu, g2: G2, size: u32, samples: u32, basis: Basis) -> Result<Self> {
+        if !(2..=1024).contains(&size) || samples == 0 {
+            return Err(Error::Unsupported(format!(
+                "Belcour table of {size} texels and {samples} samples: allowed 2..=1024 \
+                 texels and at least 1 sample"
+            )));
+        }
+        let spec = VariantKey {
+            g2,
+            ..VariantKey::default()
+        }
+        .spec();
+        let kernel = ComputeKernel::new(
+            gpu,
+            "fgd_belcour.comp.glsl",
+            &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
+            std::mem::size_of::<BelcourPush>() as u32,
+            &spec,
+        )?;
+        let device = &gpu.device;
+        let out = Buffer::new(
+            device,
+            BufferDesc::readback(u64::from(size * size) * 16),
+            "belcour texels",
+        )?;
+        let basis_buffer = Buffer::with_data(
+            device,
+            BufferUsageFlags::STORAGE_BUFFER,
+            &basis.to_f32(),
+            "belcour basis",
+        )?;
+        let mut set = DescriptorSet::new(device, &kernel.set_layout, "belcour table")?;
+        set.write(0, Resource::Buffer(&out))
+            .write(1, Resource::Buffer(&basis_buffer));
+        submit_and_wait(device, "belcour table", |rec| {
+            rec.bind_pipeline(&kernel.pipeline);
+            rec.bind_set(&kernel.pipeline, &kernel.layout, 0, &set);
+            rec.push_constants(
+                &kernel.layout,
+                &BelcourPush {
+                    size,
+                    sample_count: samples,
+                    basis_points: super::belcour::POINTS as u32,
+                },
+            );
+            rec.dispatch(super::groups(size), super::groups(size), 1);
+            rec.barrier(Access::ComputeWrite, Access::HostRead);
+            Ok(())
+        })?;
+        Ok(Self {
+            size,
+            samples,
+            basis,
+            raw: out.read(),
+        })
+    }
+
+    /// (μ, α) of texel (i, j).
+    pub fn coordinates(&self, i: u32, j: u32) -> (f64, f64) {
+        let n = f64::from(self.size);
+        let r = (f64::from(j) + 0.5) / n;
+        ((f64::from(i) + 0.5) / n, r * r)
+    }
+
+    /// The CPU twin of the shader's lookup of the raw integrals: bilinear at (μ, √α) over the
+    /// texel centres, clamped at the edges.
+    pub fn sample(&self, mu: f64, alpha: f64) -> [f64; 4] {
+        let n = self.size as usize;
+        let axis = |x: f64| {
+            let f = (x.clamp(0.0, 1.0) * n as f64 - 0.5).clamp(0.0, (n - 1) as f64);
+            let i0 = (f.floor() as usize).min(n - 2);
+            (i0, f - i0 as f64)
+        };
+        let (i, fx) = axis(mu);
+        let (j, fy) = axis(alpha.max(0.0).sqrt());
+        let texel = |i: usize, j: usize| self.raw[j * n + i].map(f64::from);
+        let lerp = |a: [f64; 4], b: [f64; 4], t: f64| {
+            let mut out = a;
+            for k in 0..4 {
+                out[k] += (b[k] - a[k]) * t;
+            }
+            out
+        };
+        lerp(
+            lerp(texel(i, j), texel(i + 1, j), fx),
+            lerp(texel(i, j + 1), texel(i + 1, j + 1), fx),
+            fy,
+        )
+    }
+
+    /// The texels with the projection folded in (what the shader samples).
+    pub fn folded(&self) -> Vec<[f32; 4]> {
+        self.raw
+            .iter()
+            .map(|l| {
+                let p = self.basis.fold(l.map(f64::from));
+                p.map(|v| v as f32)
+            })
+            .collect()
+    }
+}
+
+/// L_k(μ, α) for k = 0..3 in f64 by an `n`×`n` midpoint rule over the visible-normal
+/// sampler's uniform variables: the oracle of the Belcour table.
+pub fn belcour_reference(basis: &Basis, mu: f64, alpha: f64, g2: G2, n: u32) -> [f64; 4] {
+    let v = DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+    let g1_v = microfacet::masking_g1(g2, mu, alpha);
+    let mut sum = [0.0f64; 4];
+    for a in 0..n {
+        for b in 0..n {
+            let u = (
+                (f64::from(a) + 0.5) / f64::from(n),
+                (f64::from(b) + 0.5) / f64::from(n),
+            );
+            let h = microfacet::sample_vndf(v, u, alpha);
+            let l = microfacet::reflect(v, h);
+            if l.z <= 0.0 {
+                continue;
+            }
+            let w = microfacet::masking_shadowing(g2, mu, l.z, alpha) / g1_v;
+            let c = v.dot(h);
+            for (k, s) in sum.iter_mut().enumerate() {
+                *s += w * basis.at(k, c);
+            }
+        }
+    }
+    sum.map(|s| s / f64::from(n * n))
+}
+
+/// The images one `fgd` value samples: binding 5 (`fgd_table`, 3-D) and binding 6
+/// (`fgd_belcour`, 2-D). Values that do not sample one get a tiny zero image there.
+pub struct FgdImages {
+    pub fgd: Fgd,
+    pub volume: Image,
+    pub volume_view: ImageView,
+    pub plane: Image,
+    pub plane_view: ImageView,
+}
+
+const TABLE_USAGE: crate::vk::ImageUsageFlags = crate::vk::ImageUsageFlags::from_raw(
+    crate::vk::ImageUsageFlags::SAMPLED.as_raw()
+        | crate::vk::ImageUsageFlags::TRANSFER_DST.as_raw(),
+);
+
+impl FgdImages {
+    /// The tables of `fgd` for the G2 form `g2`, from the disk cache or built.
+    pub fn for_variant(gpu: &Gpu, fgd: Fgd, g2: G2) -> Result<Self> {
+        let dir = cache::dir();
+        match fgd {
+            Fgd::Karis => Self::new(gpu, fgd, [2, 2, 2], &[0.0; 8], 1, &[[0.0; 4]]),
+            Fgd::Belcour => {
+                let (below, _) = load_or_build_grid(
+                    gpu,
+                    GridKind::DielectricBelow1,
+                    g2,
+                    SIZE,
+                    GRID_SAMPLES,
+                    dir.as_deref(),
+                    |_, _| {},
+                )?;
+                let (table, _) =
+                    BelcourTable::load_or_build(gpu, g2, SIZE, BELCOUR_SAMPLES, dir.as_deref())?;
+                Self::new(
+                    gpu,
+                    fgd,
+                    [SIZE, SIZE, SIZE],
+                    &below.texels,
+                    SIZE,
+                    &table.folded(),
+                )
+            }
+            Fgd::Full4d | Fgd::Resampled4d => {
+                let (grid, _) = load_or_build_grid(
+                    gpu,
+                    GridKind::Full4d,
+                    g2,
+                    SIZE,
+                    GRID_SAMPLES,
+                    dir.as_deref(),
+                    |_, _| {},
+                )?;
+                Self::stacked(gpu, fgd, &grid, Filter::Box)
+            }
+        }
+    }
+
+    /// The 4-D grid as `fgd=4d` (whole) or `fgd=resampled4d` (κ filtered by `filter`).
+    pub fn stacked(gpu: &Gpu, fgd: Fgd, grid: &Grid, filter: Filter) -> Result<Self> {
+        let [nm, na, ne, nk] = grid.dims;
+        if fgd == Fgd::Full4d {
+            let limit = gpu.device.report.max_image_dimension_3d;
+            if limit < ne * nk {
+                return Err(Error::Unsupported(format!(
+                    "fgd=4d stacks the 4-D table as a {nm}×{na}×{} 3-D image, but `{}` allows \
+                     at most {limit} texels of depth (maxImageDimension3D); use \
+                     fgd=resampled4d",
+                    ne * nk,
+                    gpu.device.report.name
+                )));
+            }
+            Self::new(gpu, fgd, [nm, na, ne * nk], &grid.texels, 1, &[[0.0; 4]])
+        } else {
+            let texels = resample(grid, filter);
+            Self::new(gpu, fgd, [nm, na, ne * nk / 2], &texels, 1, &[[0.0; 4]])
+        }
+    }
+
+    /// Uploads a 3-D R32F volume and a 2-D RGBA32F plane.
+    pub fn new(
+        gpu: &Gpu,
+        fgd: Fgd,
+        volume_extent: [u32; 3],
+        volume: &[f32],
+        plane_size: u32,
+        plane: &[[f32; 4]],
+    ) -> Result<Self> {
+        let device = &gpu.device;
+        let [w, h, d] = volume_extent;
+        let volume_image = Image::new(
+            device,
+            ImageDesc::new_3d(Format::R32_SFLOAT, w, h, d).usage(TABLE_USAGE),
+            "fgd volume",
+        )?;
+        upload_image(
+            device,
+            &volume_image,
+            bytemuck::cast_slice(volume),
+            ImageState::FragmentRead,
+        )?;
+        let plane_image = Image::new(
+            device,
+            ImageDesc::new_2d(Format::R32G32B32A32_SFLOAT, plane_size, plane_size)
+                .usage(TABLE_USAGE),
+            "fgd plane",
+        )?;
+        upload_image(
+            device,
+            &plane_image,
+            bytemuck::cast_slice(plane),
+            ImageState::FragmentRead,
+        )?;
+        Ok(Self {
+            fgd,
+            volume_view: volume_image.view("fgd volume")?,
+            plane_view: plane_image.view("fgd plane")?,
+            volume: volume_image,
+            plane: plane_image,
+        })
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ProbePush {
+    count: u32,
+}
+
+/// Samples FGD at given (μ, α, η, κ) points with the shaders' own code (`fgd_probe.comp.glsl`).
+pub struct FgdProbe<'g> {
+    gpu: &'g Gpu,
+    kernel: ComputeKernel,
+    sampler: Sampler,
+}
+
+impl<'g> FgdProbe<'g> {
+    pub fn new(gpu: &'g Gpu, fgd: Fgd) -> Result<Self> {
+        let variant = VariantKey {
+            fgd,
+            ..VariantKey::default()
+        };
+        let kernel = ComputeKernel::new(
+            gpu,
+            "fgd_probe.comp.glsl",
+            &[
+                BindingKind::SampledImage,
+                BindingKind::SampledImage,
+                BindingKind::SampledImage,
+                BindingKind::StorageBuffer,
+                BindingKind::StorageBuffer,
+            ],
+            std::mem::size_of::<ProbePush>() as u32,
+            &variant.spec(),
+        )?;
+        let sampler = Sampler::new(&gpu.device, SamplerDesc::linear_clamp(), "fgd probe")?;
+        Ok(Self {
+            gpu,
+            kernel,
+            sampler,
+        })
+    }
+
+    /// FGD at each point (μ, α, η, κ).
+    pub fn sample(
+        &self,
+        split_sum: &SplitSumTable,
+        images: &FgdImages,
+        points: &[[f32; 4]],
+    ) -> Result<Vec<f32>> {
+        if points.is_empty() {
+            return Ok(Vec::new());
+        }
+        let device = &self.gpu.device;
+        let input = Buffer::with_data(
+            device,
+            BufferUsageFlags::STORAGE_BUFFER,
+            points,
+            "fgd probe points",
+        )?;
+        let output = Buffer::new(
+            device,
+            BufferDesc::readback(points.len() as u64 * 4),
+            "fgd probe values",
+        )?;
+        let mut set = DescriptorSet::new(device, &self.kernel.set_layout, "fgd probe")?;
+        set.write(0, Resource::Sampled(&split_sum.view, &self.sampler))
+            .write(1, Resource::Sampled(&images.volume_view, &self.sampler))
+            .write(2, Resource::Sampled(&images.plane_view, &self.sampler))
+            .write(3, Resource::Buffer(&input))
+            .write(4, Resource::Buffer(&output));
+        let count = points.len() as u32;
+        submit_and_wait(device, "fgd probe", |rec| {
+            rec.bind_pipeline(&self.kernel.pipeline);
+            rec.bind_set(&self.kernel.pipeline, &self.kernel.layout, 0, &set);
+            rec.push_constants(&self.kernel.layout, &ProbePush { count });
+            rec.dispatch(count.div_ceil(64), 1, 1);
+            rec.barrier(Access::ComputeWrite, Access::HostRead);
+            Ok(())
+        })?;
+        Ok(output.read())
+    }
+}
