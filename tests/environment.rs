@@ -117,7 +117,13 @@ fn split_sum_table_matches_cpu_monte_carlo() {
         (63, 20),
         (10, 25),
         (58, 45),
+        (7, 60),
+        (25, 48),
+        (45, 8),
+        (60, 33),
     ];
+    // 4096 Hammersley points of a bounded integrand against a 256² midpoint rule: both within
+    // ~1e-3 of the integral (split_sum::DEFAULT_SAMPLES).
     let mut worst = 0.0f64;
     for (i, j) in points {
         let (mu, alpha) = table.coordinates(i, j);
@@ -127,7 +133,7 @@ fn split_sum_table_matches_cpu_monte_carlo() {
             let err = (got[c] as f64 - want[c]).abs();
             worst = worst.max(err);
             assert!(
-                err < 1e-2,
+                err < 2e-3,
                 "texel ({i}, {j}) μ={mu:.3} α={alpha:.4}: GPU {got:?} vs CPU {want:?}"
             );
         }
