@@ -9,7 +9,8 @@
 //! - [`material`] — layers;
 //! - [`imageio`] — EXR/PNG input and atomic output;
 //! - [`output`] — the JSON and tables commands print;
-//! - [`profile`] — the bench runner, statistics, result files.
+//! - [`profile`] — the bench runner, statistics, result files;
+//! - [`viewer`] — the interactive window (winit + egui).
 #![warn(unsafe_op_in_unsafe_fn)]
 
 pub mod error;
@@ -22,6 +23,7 @@ pub mod profile;
 pub mod render;
 pub mod shader;
 pub mod tables;
+pub mod viewer;
 pub mod vk;
 
 pub use error::{Error, Result};

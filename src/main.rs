@@ -58,6 +58,8 @@ enum Command {
     Furnace(FurnaceArgs),
     /// Render every preset material in each variant into one tiled PNG.
     Sheet(SheetArgs),
+    /// Interactive viewer: edit the layer stack, switch variants, watch the GPU time.
+    View(ViewArgs),
     /// Time variants of the shaded draw, interleaved, against the ggx baseline.
     Bench(BenchArgs),
     /// Run a sweep file (profiling/sweeps/*.toml): results.json, results.csv and charts per study.
@@ -282,6 +284,80 @@ struct RenderArgs {
     exposure: f32,
 }
 
+#[derive(clap::Args)]
+struct ViewArgs {
+    /// Window size.
+    #[arg(long, default_value = "1280x720", value_name = "WxH")]
+    size: Size,
+    /// Equirectangular OpenEXR environment map (the picker lists its directory's maps).
+    #[arg(long, value_name = "FILE", default_value = "assets/env/studio.exr")]
+    env: PathBuf,
+    /// Material file or preset name (see assets/materials/).
+    #[arg(long, value_name = "FILE|PRESET", default_value = "gold")]
+    material: String,
+    /// Shader variant to start with; axes not given take their defaults.
+    #[arg(long, value_name = "KEY")]
+    variant: Option<String>,
+    /// Save the last frame (the swapchain image, UI included) as PNG; needs --frames.
+    #[arg(long, value_name = "FILE.png", requires = "frames")]
+    screenshot: Option<PathBuf>,
+    /// Exit after N frames.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    frames: Option<u32>,
+    /// Resize the window to WxH half-way through --frames (exercises swapchain recreation).
+    #[arg(long, value_name = "WxH", requires = "frames")]
+    resize: Option<Size>,
+    /// Save the edited stack to FILE on exit (what the Save button writes).
+    #[arg(long, value_name = "FILE.toml")]
+    save_stack: Option<PathBuf>,
+}
+
+fn view(cli: &Cli, args: &ViewArgs) -> Result<()> {
+    let (stack, variant) = material_and_variant(&args.material, args.variant.as_deref())?;
+    let env = asset_path(&args.env);
+    let env_dir = env
+        .parent()
+        .map(Path::to_owned)
+        .unwrap_or_else(|| PathBuf::from("."));
+    let report = lamina::viewer::run(lamina::viewer::ViewOptions {
+        stack,
+        variant,
+        env,
+        env_dir,
+        width: args.size.width,
+        height: args.size.height,
+        screenshot: args.screenshot.clone(),
+        frames: args.frames,
+        resize: args.resize.map(|s| (s.width, s.height)),
+        save_stack: args.save_stack.clone(),
+        instance: InstanceDesc {
+            validation: cli.validation,
+            sync_validation: cli.sync_validation,
+            surface: true,
+        },
+        selector: cli.device.clone().unwrap_or_default(),
+    })?;
+    println!(
+        "{} frame(s), final size {}x{}, swapchain built {} time(s)",
+        report.frames, report.final_size.0, report.final_size.1, report.swapchain_builds
+    );
+    if let Some(path) = &args.screenshot {
+        println!("wrote {}", path.display());
+    }
+    if let Some(path) = &args.save_stack {
+        println!("wrote {}", path.display());
+    }
+    if cli.validation || cli.sync_validation {
+        let problems = report.validation_problems;
+        if problems > 0 {
+            anyhow::bail!(
+                "the validation layer reported {problems} problem(s); see the messages above"
+            );
+        }
+    }
+    Ok(())
+}
+
 /// `WxH`, each side in 1..=16384.
 #[derive(Clone, Copy, Debug)]
 struct Size {
@@ -326,6 +402,7 @@ fn open_gpu(cli: &Cli) -> Result<Gpu> {
     let instance = InstanceDesc {
         validation: cli.validation,
         sync_validation: cli.sync_validation,
+        surface: false,
     };
     let selector = cli.device.clone().unwrap_or_default();
     Ok(Gpu::new(instance, &selector)?)
@@ -343,6 +420,7 @@ fn devices(cli: &Cli) -> Result<()> {
     let instance = lamina::vk::Instance::new(InstanceDesc {
         validation: cli.validation,
         sync_validation: cli.sync_validation,
+        surface: false,
     })?;
     for d in lamina::vk::enumerate(&instance)? {
         println!("[{}] {} ({})", d.index, d.name, d.device_type);
@@ -1069,6 +1147,7 @@ fn main() -> ExitCode {
         Command::Sweep(args) => run_sweep(&cli, args),
         Command::Report(args) => run_report(args),
         Command::Tables(args) => run_tables(&cli, args),
+        Command::View(args) => view(&cli, args),
         Command::CountWorker(args) => count_worker(&cli, args),
     };
     match result {

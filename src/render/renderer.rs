@@ -26,7 +26,7 @@ use crate::vk::{
 use super::forward::ForwardPass;
 use super::frame::FrameConstants;
 use super::material::MaterialGpu;
-use super::scene::{uv_sphere, Camera};
+use super::scene::{uv_sphere, Camera, Mesh};
 use super::sky::SkyPass;
 
 /// The render target's format: linear HDR, written to EXR as is.
@@ -119,6 +119,31 @@ impl<'g> Renderer<'g> {
             index_count: mesh.indices.len() as u32,
             camera: Camera::default(),
         })
+    }
+
+    /// Replaces the drawn mesh (the sphere by default).
+    pub fn set_mesh(&mut self, mesh: &Mesh) -> Result<()> {
+        let device = &self.gpu.device;
+        self.vertices = Buffer::with_data(
+            device,
+            BufferUsageFlags::VERTEX_BUFFER,
+            &mesh.vertices,
+            "mesh vertices",
+        )?;
+        self.indices = Buffer::with_data(
+            device,
+            BufferUsageFlags::INDEX_BUFFER,
+            &mesh.indices,
+            "mesh indices",
+        )?;
+        self.index_count = mesh.indices.len() as u32;
+        Ok(())
+    }
+
+    /// Replaces the environment (prefiltered from `equirect` per `env`).
+    pub fn set_environment(&mut self, equirect: &HdrImage, env: EnvDesc) -> Result<()> {
+        self.environment = Environment::build(self.gpu, equirect, env)?;
+        Ok(())
     }
 
     /// Compiles and builds the pipeline of `variant` (and the tables it samples).

@@ -92,9 +92,55 @@ pub fn uv_sphere(stacks: u32, slices: u32) -> Mesh {
     Mesh { vertices, indices }
 }
 
+/// A torus around the y axis (ring radius `major`, tube radius `minor`), triangles
+/// counter-clockwise seen from outside: the viewer's second mesh, whose saddle and concave
+/// regions show the lobes at angles a sphere does not.
+pub fn torus(major: f32, minor: f32, rings: u32, sides: u32) -> Mesh {
+    let mut vertices = Vec::new();
+    for i in 0..=rings {
+        let u = std::f32::consts::TAU * i as f32 / rings as f32;
+        let (su, cu) = u.sin_cos();
+        for j in 0..=sides {
+            let v = std::f32::consts::TAU * j as f32 / sides as f32;
+            let (sv, cv) = v.sin_cos();
+            let normal = [cv * su, sv, cv * cu];
+            let r = major + minor * cv;
+            vertices.push(Vertex {
+                position: [r * su, minor * sv, r * cu],
+                normal,
+            });
+        }
+    }
+    let mut indices = Vec::new();
+    let row = sides + 1;
+    for i in 0..rings {
+        for j in 0..sides {
+            let a = i * row + j;
+            let (b, c, d) = (a + row, a + 1, a + row + 1);
+            indices.extend([a, b, c, c, b, d]);
+        }
+    }
+    Mesh { vertices, indices }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn torus_triangles_face_along_their_normals() {
+        let mesh = torus(0.7, 0.3, 24, 16);
+        for tri in mesh.indices.chunks(3) {
+            let v = |i: u32| mesh.vertices[i as usize];
+            let p = |i: u32| Vec3::from(v(i).position);
+            let (a, b, c) = (p(tri[0]), p(tri[1]), p(tri[2]));
+            let face = (b - a).cross(c - a);
+            let normal = Vec3::from(v(tri[0]).normal)
+                + Vec3::from(v(tri[1]).normal)
+                + Vec3::from(v(tri[2]).normal);
+            assert!(face.dot(normal) > 0.0, "inward triangle {tri:?}");
+        }
+    }
 
     #[test]
     fn sphere_triangles_face_outwards() {

@@ -30,6 +30,8 @@ pub enum ImageState {
     /// Storage image written (and read) by compute shaders.
     ComputeWrite,
     ColorAttachment,
+    /// A swapchain image handed to presentation.
+    Present,
 }
 
 impl ImageState {
@@ -59,6 +61,7 @@ impl ImageState {
                 S::COLOR_ATTACHMENT_OUTPUT,
                 A::COLOR_ATTACHMENT_WRITE | A::COLOR_ATTACHMENT_READ,
             ),
+            Self::Present => (L::PRESENT_SRC_KHR, S::NONE, A::NONE),
         }
     }
 }
@@ -109,13 +112,24 @@ impl Recorder<'_> {
         from: ImageState,
         to: ImageState,
     ) {
-        let (old_layout, src_stage, src_access) = from.parts();
-        let (new_layout, dst_stage, dst_access) = to.parts();
         let range = vk::ImageSubresourceRange {
             base_mip_level: mips.start,
             level_count: mips.end - mips.start,
             ..image.desc.full_range()
         };
+        self.barrier_raw(image.raw, range, from, to);
+    }
+
+    /// An image barrier on a raw image of this device.
+    pub(crate) fn barrier_raw(
+        &mut self,
+        image: vk::Image,
+        range: vk::ImageSubresourceRange,
+        from: ImageState,
+        to: ImageState,
+    ) {
+        let (old_layout, src_stage, src_access) = from.parts();
+        let (new_layout, dst_stage, dst_access) = to.parts();
         let barrier = [vk::ImageMemoryBarrier2::default()
             .src_stage_mask(src_stage)
             .src_access_mask(src_access)
@@ -125,7 +139,7 @@ impl Recorder<'_> {
             .new_layout(new_layout)
             .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
             .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .image(image.raw)
+            .image(image)
             .subresource_range(range)];
         let info = vk::DependencyInfo::default().image_memory_barriers(&barrier);
         // SAFETY: recording state; the image belongs to this device.
@@ -201,23 +215,23 @@ impl Recorder<'_> {
         height: u32,
         clear: [f32; 4],
     ) {
-        self.begin_rendering_with(target, width, height, Some(clear));
+        self.begin_rendering_raw(target.raw, width, height, Some(clear));
     }
 
     /// Begins dynamic rendering into `target` (in `ColorAttachment` state), keeping its contents.
     pub fn begin_rendering_load(&mut self, target: &ImageView, width: u32, height: u32) {
-        self.begin_rendering_with(target, width, height, None);
+        self.begin_rendering_raw(target.raw, width, height, None);
     }
 
-    fn begin_rendering_with(
+    pub(crate) fn begin_rendering_raw(
         &mut self,
-        target: &ImageView,
+        target: vk::ImageView,
         width: u32,
         height: u32,
         clear: Option<[f32; 4]>,
     ) {
         let attachments = [vk::RenderingAttachmentInfo::default()
-            .image_view(target.raw)
+            .image_view(target)
             .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
             .load_op(if clear.is_some() {
                 vk::AttachmentLoadOp::CLEAR
@@ -447,26 +461,10 @@ pub fn submit_and_wait<R>(
     record: impl FnOnce(&mut Recorder<'_>) -> VkResult<R>,
 ) -> VkResult<R> {
     let pool = CommandPool::new(device, name)?;
-    let alloc = vk::CommandBufferAllocateInfo::default()
-        .command_pool(pool.raw)
-        .level(vk::CommandBufferLevel::PRIMARY)
-        .command_buffer_count(1);
-    // SAFETY: the pool is alive and owned here; the buffer is freed with it.
-    let cmd = unsafe { device.raw.allocate_command_buffers(&alloc) }
-        .check("vkAllocateCommandBuffers")?[0];
-    device.set_name(cmd, name);
-    let begin =
-        vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-    // SAFETY: fresh command buffer.
-    unsafe { device.raw.begin_command_buffer(cmd, &begin) }.check("vkBeginCommandBuffer")?;
-    let mut recorder = Recorder {
-        device,
-        raw: cmd,
-        graveyard: Vec::new(),
-    };
+    let cmd = pool.allocate(device, name)?;
+    let mut recorder = Recorder::begin(device, cmd)?;
     let value = record(&mut recorder)?;
-    // SAFETY: recording state.
-    unsafe { device.raw.end_command_buffer(cmd) }.check("vkEndCommandBuffer")?;
+    recorder.end()?;
 
     let fence = Fence::new(device)?;
     let cmd_infos = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
@@ -487,13 +485,34 @@ pub fn submit_and_wait<R>(
     Ok(value)
 }
 
-struct CommandPool {
+impl<'d> Recorder<'d> {
+    /// Begins recording a fresh primary command buffer.
+    pub(crate) fn begin(device: &'d Device, cmd: vk::CommandBuffer) -> VkResult<Self> {
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: a fresh command buffer of this device.
+        unsafe { device.raw.begin_command_buffer(cmd, &begin) }.check("vkBeginCommandBuffer")?;
+        Ok(Self {
+            device,
+            raw: cmd,
+            graveyard: Vec::new(),
+        })
+    }
+
+    /// Ends recording; the recorder lives on to keep retired values until the submission ends.
+    pub(crate) fn end(&mut self) -> VkResult<()> {
+        // SAFETY: recording state.
+        unsafe { self.device.raw.end_command_buffer(self.raw) }.check("vkEndCommandBuffer")
+    }
+}
+
+pub(crate) struct CommandPool {
     device: Arc<Device>,
-    raw: vk::CommandPool,
+    pub(crate) raw: vk::CommandPool,
 }
 
 impl CommandPool {
-    fn new(device: &Arc<Device>, name: &str) -> VkResult<Self> {
+    pub(crate) fn new(device: &Arc<Device>, name: &str) -> VkResult<Self> {
         let info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(device.queue_family)
             .flags(vk::CommandPoolCreateFlags::TRANSIENT);
@@ -508,6 +527,21 @@ impl CommandPool {
     }
 }
 
+impl CommandPool {
+    /// One primary command buffer, freed with the pool.
+    pub(crate) fn allocate(&self, device: &Device, name: &str) -> VkResult<vk::CommandBuffer> {
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(self.raw)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: the pool is alive and owned by the caller.
+        let cmd = unsafe { device.raw.allocate_command_buffers(&alloc) }
+            .check("vkAllocateCommandBuffers")?[0];
+        device.set_name(cmd, name);
+        Ok(cmd)
+    }
+}
+
 impl Drop for CommandPool {
     fn drop(&mut self) {
         if std::thread::panicking() {
@@ -518,13 +552,13 @@ impl Drop for CommandPool {
     }
 }
 
-struct Fence {
+pub(crate) struct Fence {
     device: Arc<Device>,
-    raw: vk::Fence,
+    pub(crate) raw: vk::Fence,
 }
 
 impl Fence {
-    fn new(device: &Arc<Device>) -> VkResult<Self> {
+    pub(crate) fn new(device: &Arc<Device>) -> VkResult<Self> {
         // SAFETY: valid create info on a live device.
         let raw = unsafe {
             device

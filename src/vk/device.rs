@@ -147,6 +147,9 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<DeviceReport>> {
 /// The logical device with everything lamina's passes need.
 pub struct Device {
     pub(crate) raw: ash::Device,
+    pub(crate) physical: vk::PhysicalDevice,
+    /// `VK_KHR_swapchain`, enabled when the instance has surfaces and the device offers it.
+    pub(crate) swapchain: Option<ash::khr::swapchain::Device>,
     pub(crate) queue: vk::Queue,
     pub(crate) queue_family: u32,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
@@ -227,6 +230,17 @@ impl Device {
         if chosen.pipeline_executable_properties {
             extensions.push(ash::khr::pipeline_executable_properties::NAME.as_ptr());
         }
+        // SAFETY: plain enumeration on a live physical device.
+        let device_extensions =
+            unsafe { instance.raw.enumerate_device_extension_properties(physical) }
+                .check("vkEnumerateDeviceExtensionProperties")?;
+        let swapchain = instance.surface
+            && device_extensions
+                .iter()
+                .any(|e| e.extension_name_as_c_str() == Ok(ash::khr::swapchain::NAME));
+        if swapchain {
+            extensions.push(ash::khr::swapchain::NAME.as_ptr());
+        }
         let core = vk::PhysicalDeviceFeatures::default()
             .pipeline_statistics_query(chosen.pipeline_statistics);
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
@@ -279,8 +293,11 @@ impl Device {
             .pipeline_executable_properties
             .then(|| ash::khr::pipeline_executable_properties::Device::new(&instance.raw, &raw));
 
+        let swapchain = swapchain.then(|| ash::khr::swapchain::Device::new(&instance.raw, &raw));
         Ok(Arc::new(Self {
             raw,
+            physical,
+            swapchain,
             queue,
             queue_family,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),

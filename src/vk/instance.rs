@@ -21,13 +21,16 @@ pub struct InstanceDesc {
     pub validation: bool,
     /// Also enable synchronization validation (implies `validation`).
     pub sync_validation: bool,
+    /// Enable `VK_KHR_surface` and the window-system surface extensions the loader offers
+    /// (X11, Wayland), so a window can be presented to (the viewer).
+    pub surface: bool,
 }
 
 impl InstanceDesc {
     pub fn validated() -> Self {
         Self {
             validation: true,
-            sync_validation: false,
+            ..Self::default()
         }
     }
 }
@@ -70,15 +73,24 @@ impl MessageCounts {
     }
 }
 
+/// The window-system surface extensions lamina enables when the loader has them.
+const SURFACE_EXTENSIONS: [&CStr; 3] = [
+    ash::khr::xlib_surface::NAME,
+    ash::khr::xcb_surface::NAME,
+    ash::khr::wayland_surface::NAME,
+];
+
 pub struct Instance {
     /// Keeps the loader library loaded for as long as the instance lives.
-    _entry: ash::Entry,
+    pub(crate) entry: ash::Entry,
     pub(crate) raw: ash::Instance,
     pub(crate) debug_utils: Option<ash::ext::debug_utils::Instance>,
     messenger: vk::DebugUtilsMessengerEXT,
     /// Boxed so the pointer handed to the messenger stays put.
     counts: Box<MessageCounts>,
     pub validation: bool,
+    /// Whether the surface extensions are enabled ([`InstanceDesc::surface`]).
+    pub surface: bool,
 }
 
 unsafe extern "system" fn debug_callback(
@@ -143,11 +155,30 @@ impl Instance {
         } else {
             Vec::new()
         };
-        let ext_ptrs: Vec<*const i8> = if has_debug_utils {
-            vec![ash::ext::debug_utils::NAME.as_ptr()]
-        } else {
-            Vec::new()
+        let has = |name: &CStr| {
+            extensions
+                .iter()
+                .any(|e| e.extension_name_as_c_str() == Ok(name))
         };
+        let mut ext_ptrs: Vec<*const i8> = Vec::new();
+        if has_debug_utils {
+            ext_ptrs.push(ash::ext::debug_utils::NAME.as_ptr());
+        }
+        let surface = desc.surface && has(ash::khr::surface::NAME);
+        if desc.surface && !surface {
+            return Err(VkError::Unsupported(
+                "the Vulkan loader offers no VK_KHR_surface: no window can be presented to".into(),
+            ));
+        }
+        if surface {
+            ext_ptrs.push(ash::khr::surface::NAME.as_ptr());
+            ext_ptrs.extend(
+                SURFACE_EXTENSIONS
+                    .iter()
+                    .filter(|n| has(n))
+                    .map(|n| n.as_ptr()),
+            );
+        }
         let enabled_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
         let mut validation_features =
             vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_features);
@@ -195,12 +226,13 @@ impl Instance {
         };
 
         Ok(Self {
-            _entry: entry,
+            entry,
             raw,
             debug_utils,
             messenger,
             counts,
             validation,
+            surface,
         })
     }
 

@@ -20,8 +20,10 @@ mod error;
 mod image;
 mod instance;
 mod memory;
+mod overlay;
 mod pipeline;
 mod query;
+mod swapchain;
 
 pub use ash::vk::{BufferUsageFlags, Format, ImageUsageFlags};
 pub use buffer::{Buffer, BufferDesc};
@@ -33,8 +35,10 @@ pub use device::{enumerate, Device, DeviceReport, DeviceSelector};
 pub use error::{VkError, VkResult};
 pub use image::{Image, ImageDesc, ImageKind, ImageView, Sampler, SamplerDesc};
 pub use instance::{Instance, InstanceDesc, MessageCounts};
+pub use overlay::Overlay;
 pub use pipeline::{
     ExecutableStat, ExecutableStats, GraphicsDesc, Pipeline, PipelineLayout, SpecConstants,
     SpecEntry,
 };
 pub use query::{GpuProfiler, Nanos, ScopeError, ScopeTiming, ScopeToken};
+pub use swapchain::{submit_frame, Acquired, Semaphore, Surface, Swapchain};

@@ -1,0 +1,567 @@
+//! The viewer's panels: the layer stack, the variant, the environment and the profiling
+//! history, around the rendered scene.
+
+use std::collections::VecDeque;
+use std::path::{Path, PathBuf};
+
+use egui::{Color32, ComboBox, DragValue, RichText, Slider, Ui};
+
+use crate::error::{Error, Result};
+use crate::material::{gulbrandsen, presets, Stack};
+use crate::model::LayerParams;
+use crate::render::scene::Camera;
+use crate::shader::variant::Axis;
+use crate::shader::{Fgd, Model, Ndf, Tir, VariantKey, G2};
+
+use super::{orbit, stack_model, summary, ViewOptions, HISTORY};
+
+/// Width of the side panel in points.
+const SIDE_WIDTH: f32 = 330.0;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshKind {
+    Sphere,
+    Torus,
+}
+
+/// Work the panels ask of the renderer between frames.
+pub enum Action {
+    Environment(PathBuf),
+    Mesh(MeshKind),
+}
+
+pub struct Panels {
+    pub stack: Stack,
+    /// What the variant panel asks for.
+    requested: VariantKey,
+    /// What the current pipeline was built from (`None` before the first build).
+    compiled: Option<VariantKey>,
+    message: Option<String>,
+    presets: Vec<(String, PathBuf)>,
+    envs: Vec<PathBuf>,
+    env_index: usize,
+    mesh: MeshKind,
+    pub exposure: f32,
+    /// Per layer: edit the artist form (F0, edge tint) instead of (η, κ).
+    artist: Vec<Option<([f32; 3], [f32; 3])>>,
+    file: String,
+    history: VecDeque<f64>,
+    invocations: Option<u64>,
+    device: String,
+    fp16_supported: bool,
+    yaw: f32,
+    pitch: f32,
+    distance: f32,
+    /// The scene image's size in physical pixels, from the last layout.
+    viewport: (u32, u32),
+    actions: Vec<Action>,
+}
+
+impl Panels {
+    pub fn new(options: &ViewOptions, device: String) -> Result<Self> {
+        let presets = presets()
+            .into_iter()
+            .filter_map(|p| Some((p.file_stem()?.to_string_lossy().into_owned(), p)))
+            .collect();
+        let mut envs: Vec<PathBuf> = std::fs::read_dir(&options.env_dir)
+            .map_err(|e| Error::Input {
+                path: options.env_dir.clone(),
+                message: format!("listing environment maps: {e}"),
+            })?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|x| x == "exr"))
+            .collect();
+        envs.sort();
+        let env_index = envs
+            .iter()
+            .position(|p| p.file_name() == options.env.file_name())
+            .unwrap_or_else(|| {
+                envs.push(options.env.clone());
+                envs.len() - 1
+            });
+        let camera = Camera::default();
+        let distance = camera.eye.length();
+        Ok(Self {
+            artist: vec![None; options.stack.layers.len()],
+            stack: options.stack.clone(),
+            requested: options.variant,
+            compiled: None,
+            message: None,
+            presets,
+            envs,
+            env_index,
+            mesh: MeshKind::Sphere,
+            exposure: 0.0,
+            file: options
+                .save_stack
+                .as_ref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_else(|| "stack.toml".into()),
+            history: VecDeque::with_capacity(HISTORY),
+            invocations: None,
+            device,
+            fp16_supported: true,
+            yaw: (camera.eye.x).atan2(camera.eye.z),
+            pitch: (camera.eye.y / distance).asin(),
+            distance,
+            viewport: (
+                options.width.saturating_sub(SIDE_WIDTH as u32).max(64),
+                options.height,
+            ),
+            actions: Vec::new(),
+        })
+    }
+
+    pub fn take_actions(&mut self) -> Vec<Action> {
+        std::mem::take(&mut self.actions)
+    }
+
+    /// The variant the scene should render: the requested one, unless it cannot hold the
+    /// stack (then the message says so and the last good one stays).
+    pub fn variant_for_scene(&mut self) -> VariantKey {
+        if self.stack.layers.len() > self.requested.max_layers as usize {
+            self.message = Some(format!(
+                "the stack has {} layers; max_layers={} holds at most {}: raise max_layers or \
+                 remove layers",
+                self.stack.layers.len(),
+                self.requested.max_layers,
+                self.requested.max_layers
+            ));
+            return self.compiled.unwrap_or(self.requested);
+        }
+        self.requested
+    }
+
+    /// The scene thread could not render a frame.
+    pub fn failed(&mut self, message: String) {
+        self.message = Some(message);
+    }
+
+    /// The outcome of building `variant`.
+    pub fn compiled(&mut self, variant: VariantKey, error: Option<String>) {
+        match error {
+            None => {
+                self.compiled = Some(variant);
+                self.message = None;
+                self.history.clear();
+            }
+            Some(e) => {
+                self.message = Some(format!("{variant}: {e}"));
+                // Back to what runs, so the message stays until the next change.
+                if let Some(c) = self.compiled {
+                    self.requested = c;
+                }
+                if e.contains("fp16") {
+                    self.fp16_supported = false;
+                }
+            }
+        }
+    }
+
+    pub fn record_timing(&mut self, ms: f64, invocations: Option<u64>) {
+        if self.history.len() == HISTORY {
+            self.history.pop_front();
+        }
+        self.history.push_back(ms);
+        self.invocations = invocations;
+    }
+
+    pub fn viewport_pixels(&self) -> (u32, u32) {
+        (self.viewport.0.max(16), self.viewport.1.max(16))
+    }
+
+    pub fn camera(&self) -> Camera {
+        orbit(self.yaw, self.pitch, self.distance)
+    }
+
+    pub fn zoom(&mut self, lines: f32) {
+        self.distance = (self.distance * (1.0 - 0.08 * lines)).clamp(1.4, 12.0);
+    }
+
+    pub fn show(&mut self, ui: &mut Ui, scene: Option<&egui::TextureHandle>) {
+        egui::Panel::left("controls")
+            .resizable(false)
+            .exact_size(SIDE_WIDTH)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    if let Some(message) = &self.message {
+                        ui.label(RichText::new(message).color(Color32::from_rgb(240, 180, 80)));
+                        ui.separator();
+                    }
+                    if self.compiled != Some(self.requested) && self.message.is_none() {
+                        ui.label(format!("compiling {} …", self.requested));
+                        ui.separator();
+                    }
+                    egui::CollapsingHeader::new("Profiling")
+                        .default_open(true)
+                        .show(ui, |ui| self.profiling(ui));
+                    egui::CollapsingHeader::new("Variant")
+                        .default_open(true)
+                        .show(ui, |ui| self.variant(ui));
+                    ui.collapsing("Scene", |ui| self.scene(ui));
+                    egui::CollapsingHeader::new("Layer stack")
+                        .default_open(true)
+                        .show(ui, |ui| self.layers(ui));
+                });
+            });
+        egui::CentralPanel::no_frame().show(ui, |ui| {
+            let size = ui.available_size();
+            let ppp = ui.ctx().pixels_per_point();
+            self.viewport = (
+                (size.x * ppp).round().max(16.0) as u32,
+                (size.y * ppp).round().max(16.0) as u32,
+            );
+            if let Some(texture) = scene {
+                let response = ui.add(
+                    egui::Image::new((texture.id(), size)).sense(egui::Sense::click_and_drag()),
+                );
+                if response.dragged() {
+                    let d = response.drag_delta();
+                    self.yaw -= d.x * 0.01;
+                    self.pitch = (self.pitch + d.y * 0.01).clamp(-1.45, 1.45);
+                }
+            }
+        });
+    }
+
+    fn profiling(&mut self, ui: &mut Ui) {
+        ui.label(format!("device: {}", self.device));
+        match summary(&self.history) {
+            Some((avg, min, max)) => {
+                ui.label(format!(
+                    "shaded draw, last {} frames: avg {avg:.3} ms, min {min:.3}, max {max:.3}",
+                    self.history.len()
+                ));
+            }
+            None => {
+                ui.label("shaded draw: no frame yet");
+            }
+        }
+        if let Some(n) = self.invocations {
+            ui.label(format!("fragment invocations: {n}"));
+        }
+        let (rect, _) =
+            ui.allocate_exact_size(egui::vec2(ui.available_width(), 60.0), egui::Sense::hover());
+        let painter = ui.painter_at(rect);
+        painter.rect_filled(rect, 2.0, Color32::from_gray(24));
+        if let Some((_, _, max)) = summary(&self.history) {
+            let n = self.history.len().max(2) - 1;
+            let points: Vec<egui::Pos2> = self
+                .history
+                .iter()
+                .enumerate()
+                .map(|(i, &ms)| {
+                    egui::pos2(
+                        rect.left() + rect.width() * i as f32 / n as f32,
+                        rect.bottom() - rect.height() * (ms / max.max(1e-9)) as f32 * 0.95,
+                    )
+                })
+                .collect();
+            painter.add(egui::Shape::line(
+                points,
+                egui::Stroke::new(1.5, Color32::from_rgb(120, 200, 255)),
+            ));
+        }
+    }
+
+    fn variant(&mut self, ui: &mut Ui) {
+        let before = self.requested;
+        let v = &mut self.requested;
+        choose(ui, "model", &mut v.model, Model::VALUES);
+        ui.add(Slider::new(&mut v.max_layers, 1..=16).text("max_layers"));
+        ui.add_enabled(
+            self.fp16_supported,
+            egui::Checkbox::new(&mut v.fp16, "fp16 arithmetic"),
+        );
+        choose(ui, "tir", &mut v.tir, Tir::VALUES);
+        choose(ui, "fgd", &mut v.fgd, Fgd::VALUES);
+        choose(ui, "g2", &mut v.g2, G2::VALUES);
+        choose(ui, "ndf", &mut v.ndf, Ndf::VALUES);
+        if self.requested != before {
+            self.stack.model = stack_model(self.requested.model, self.stack.model);
+            self.message = None;
+        }
+        ui.label(RichText::new(self.requested.to_string()).small());
+    }
+
+    fn scene(&mut self, ui: &mut Ui) {
+        let env_before = self.env_index;
+        ComboBox::from_label("environment")
+            .selected_text(file_stem(&self.envs[self.env_index]))
+            .show_ui(ui, |ui| {
+                for (i, path) in self.envs.iter().enumerate() {
+                    ui.selectable_value(&mut self.env_index, i, file_stem(path));
+                }
+            });
+        if self.env_index != env_before {
+            self.actions
+                .push(Action::Environment(self.envs[self.env_index].clone()));
+        }
+        let mesh_before = self.mesh;
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut self.mesh, MeshKind::Sphere, "sphere");
+            ui.selectable_value(&mut self.mesh, MeshKind::Torus, "torus");
+        });
+        if self.mesh != mesh_before {
+            self.actions.push(Action::Mesh(self.mesh));
+        }
+        ui.add(Slider::new(&mut self.exposure, -6.0..=6.0).text("exposure (EV)"));
+        ui.label("drag the image to orbit, scroll to zoom");
+    }
+
+    fn layers(&mut self, ui: &mut Ui) {
+        ui.horizontal(|ui| {
+            let mut chosen = None;
+            ComboBox::from_label("preset")
+                .selected_text(&self.stack.name)
+                .show_ui(ui, |ui| {
+                    for (name, path) in &self.presets {
+                        if ui.selectable_label(false, name).clicked() {
+                            chosen = Some(path.clone());
+                        }
+                    }
+                });
+            if let Some(path) = chosen {
+                self.load(&path);
+            }
+        });
+        ui.horizontal(|ui| {
+            ui.text_edit_singleline(&mut self.file);
+        });
+        ui.horizontal(|ui| {
+            if ui.button("Load TOML").clicked() {
+                let path = PathBuf::from(&self.file);
+                self.load(&path);
+            }
+            if ui.button("Save TOML").clicked() {
+                let path = PathBuf::from(&self.file);
+                self.message = Some(match self.stack.save(&path) {
+                    Ok(()) => format!("saved {}", path.display()),
+                    Err(e) => e.to_string(),
+                });
+            }
+        });
+        ui.separator();
+        let count = self.stack.layers.len();
+        let mut edit = self.stack.layers.clone();
+        let mut artist = self.artist.clone();
+        let mut op = None;
+        let tm6 = self.stack.model == Model::Tm6;
+        for (i, layer) in edit.iter_mut().enumerate() {
+            let last = i + 1 == count;
+            egui::CollapsingHeader::new(format!("layer {}{}", i + 1, describe(layer)))
+                .id_salt(("layer", i))
+                .default_open(count <= 2)
+                .show(ui, |ui| {
+                    ui.horizontal(|ui| {
+                        if ui.small_button("up").clicked() && i > 0 && !last {
+                            op = Some(LayerOp::Up(i));
+                        }
+                        if ui.small_button("down").clicked() && i + 2 < count {
+                            op = Some(LayerOp::Down(i));
+                        }
+                        if ui.small_button("remove").clicked() && count > 1 {
+                            op = Some(LayerOp::Remove(i));
+                        }
+                    });
+                    layer_editor(ui, layer, &mut artist[i], tm6);
+                });
+        }
+        if ui.button("add a clear coat on top").clicked() {
+            op = Some(LayerOp::AddTop);
+        }
+        let changed = edit != self.stack.layers || op.is_some();
+        if let Some(op) = op {
+            op.apply(&mut edit, &mut artist);
+        }
+        self.artist = artist;
+        if changed {
+            self.try_stack(edit);
+        }
+    }
+
+    /// Takes an edited stack when it passes the file format's validation (the same checks
+    /// `lamina render` applies), else says why and keeps the current one.
+    fn try_stack(&mut self, layers: Vec<LayerParams>) {
+        let candidate = Stack {
+            layers,
+            ..self.stack.clone()
+        };
+        match Stack::from_toml(&candidate.to_toml(), Path::new("(edited stack)")) {
+            Ok(valid) => {
+                self.artist.resize(valid.layers.len(), None);
+                self.stack = valid;
+                if self.stack.layers.len() > self.requested.max_layers as usize {
+                    self.message = Some(format!(
+                        "the stack has {} layers; max_layers={} holds at most {}: raise max_layers",
+                        self.stack.layers.len(),
+                        self.requested.max_layers,
+                        self.requested.max_layers
+                    ));
+                } else if self
+                    .message
+                    .as_deref()
+                    .is_some_and(|m| m.contains("layers;"))
+                {
+                    self.message = None;
+                }
+            }
+            Err(e) => self.message = Some(e.to_string()),
+        }
+    }
+
+    fn load(&mut self, path: &Path) {
+        match Stack::load(path) {
+            Ok(stack) => {
+                self.artist = vec![None; stack.layers.len()];
+                if stack.layers.len() > self.requested.max_layers as usize {
+                    self.requested.max_layers = stack.layers.len() as u32;
+                }
+                if self.requested.model != Model::Ggx {
+                    self.requested.model = stack.model;
+                }
+                self.stack = stack;
+                self.message = None;
+            }
+            Err(e) => self.message = Some(e.to_string()),
+        }
+    }
+}
+
+enum LayerOp {
+    Up(usize),
+    Down(usize),
+    Remove(usize),
+    AddTop,
+}
+
+impl LayerOp {
+    fn apply(self, layers: &mut Vec<LayerParams>, artist: &mut Vec<Option<([f32; 3], [f32; 3])>>) {
+        match self {
+            Self::Up(i) => {
+                layers.swap(i - 1, i);
+                artist.swap(i - 1, i);
+            }
+            Self::Down(i) => {
+                layers.swap(i, i + 1);
+                artist.swap(i, i + 1);
+            }
+            Self::Remove(i) => {
+                layers.remove(i);
+                artist.remove(i);
+            }
+            Self::AddTop => {
+                layers.insert(
+                    0,
+                    LayerParams {
+                        ior: [1.5; 3],
+                        kappa: [0.0; 3],
+                        roughness: 0.05,
+                        depth: 0.0,
+                        sigma_s: [0.0; 3],
+                        sigma_a: [0.0; 3],
+                        g: 0.0,
+                    },
+                );
+                artist.insert(0, None);
+            }
+        }
+    }
+}
+
+fn describe(layer: &LayerParams) -> &'static str {
+    if layer.is_conductor() {
+        " (conductor)"
+    } else if layer.depth > 0.0 {
+        " (dielectric, medium)"
+    } else {
+        " (dielectric)"
+    }
+}
+
+/// One layer's fields: the physical form (η, κ per channel) or the artist form (F0 and edge
+/// tint, Gulbrandsen 2014) for conductors, roughness, and the 6-flux medium.
+fn layer_editor(
+    ui: &mut Ui,
+    layer: &mut LayerParams,
+    artist: &mut Option<([f32; 3], [f32; 3])>,
+    tm6: bool,
+) {
+    if layer.is_conductor() {
+        let mut use_artist = artist.is_some();
+        ui.checkbox(&mut use_artist, "artist form (F0, edge tint)");
+        if use_artist && artist.is_none() {
+            let f0 = std::array::from_fn(|c| {
+                let (n, k) = (layer.ior[c], layer.kappa[c]);
+                (((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k)) as f32
+            });
+            *artist = Some((f0, [0.5; 3]));
+        } else if !use_artist {
+            *artist = None;
+        }
+    }
+    match artist {
+        Some((f0, tint)) => {
+            ui.horizontal(|ui| {
+                egui::color_picker::color_edit_button_rgb(ui, f0);
+                ui.label("F0");
+                egui::color_picker::color_edit_button_rgb(ui, tint);
+                ui.label("edge tint");
+            });
+            for c in 0..3 {
+                let (n, k) = gulbrandsen(f64::from(f0[c]).clamp(0.0, 0.999), f64::from(tint[c]));
+                layer.ior[c] = n;
+                layer.kappa[c] = k.max(1e-3);
+            }
+        }
+        None => {
+            rgb_row(ui, "η", &mut layer.ior, 0.01..=10.0, 0.005);
+            if layer.is_conductor() {
+                rgb_row(ui, "κ", &mut layer.kappa, 0.001..=20.0, 0.01);
+            }
+        }
+    }
+    ui.add(Slider::new(&mut layer.roughness, 0.0..=1.0).text("roughness α"));
+    if tm6 && !layer.is_conductor() {
+        ui.add(Slider::new(&mut layer.depth, 0.0..=10.0).text("depth"));
+        rgb_row(ui, "σs", &mut layer.sigma_s, 0.0..=50.0, 0.05);
+        rgb_row(ui, "σa", &mut layer.sigma_a, 0.0..=50.0, 0.05);
+        ui.add(Slider::new(&mut layer.g, -0.95..=0.95).text("g"));
+    }
+}
+
+fn rgb_row(
+    ui: &mut Ui,
+    label: &str,
+    values: &mut [f64; 3],
+    range: std::ops::RangeInclusive<f64>,
+    speed: f64,
+) {
+    ui.horizontal(|ui| {
+        ui.label(label);
+        for v in values.iter_mut() {
+            ui.add(DragValue::new(v).range(range.clone()).speed(speed));
+        }
+    });
+}
+
+fn choose<T: Axis + PartialEq + Copy + std::fmt::Display>(
+    ui: &mut Ui,
+    label: &str,
+    value: &mut T,
+    values: &[(&str, T)],
+) {
+    ComboBox::from_label(label)
+        .selected_text(value.to_string())
+        .show_ui(ui, |ui| {
+            for &(name, v) in values {
+                ui.selectable_value(value, v, name);
+            }
+        });
+}
+
+fn file_stem(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
