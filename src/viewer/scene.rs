@@ -122,7 +122,8 @@ fn step(
         };
         renderer.set_mesh(&mesh)?;
     }
-    if pass.as_ref().map(|p| p.variant) != Some(request.variant) {
+    let compiled = pass.as_ref().map(|p| p.variant) != Some(request.variant);
+    if compiled {
         let outcome = renderer.prepare(request.variant);
         let error = outcome.as_ref().err().map(|e| e.to_string());
         let _ = replies.send(Reply::Compiled {
@@ -139,6 +140,10 @@ fn step(
         return Ok(None);
     }
     renderer.camera = request.camera;
+    if compiled {
+        // llvmpipe compiles the shader at its first draw: keep that out of the history.
+        renderer.render(pass, &request.layers, request.width, request.height)?;
+    }
     let frame = renderer.render(pass, &request.layers, request.width, request.height)?;
     Ok(Some(Frame {
         width: frame.width,
