@@ -21,7 +21,7 @@ use std::sync::Arc;
 
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
-use winit::event::{MouseScrollDelta, WindowEvent};
+use winit::event::WindowEvent;
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use winit::window::{Window, WindowId};
@@ -461,18 +461,11 @@ impl ApplicationHandler for App<'_> {
         let Some(w) = self.window.as_mut() else {
             return;
         };
-        let consumed = w.input.on_window_event(&w.window, &event).consumed;
+        let _ = w.input.on_window_event(&w.window, &event);
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(_) | WindowEvent::ScaleFactorChanged { .. } => {
                 self.swapchain_stale = true;
-            }
-            WindowEvent::MouseWheel { delta, .. } if !consumed => {
-                let lines = match delta {
-                    MouseScrollDelta::LineDelta(_, y) => y,
-                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
-                };
-                self.panels.zoom(lines);
             }
             WindowEvent::RedrawRequested => {
                 if let Err(e) = self.redraw(event_loop) {

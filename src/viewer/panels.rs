@@ -174,7 +174,7 @@ impl Panels {
         orbit(self.yaw, self.pitch, self.distance)
     }
 
-    pub fn zoom(&mut self, lines: f32) {
+    fn zoom(&mut self, lines: f32) {
         self.distance = (self.distance * (1.0 - 0.08 * lines)).clamp(1.4, 12.0);
     }
 
@@ -219,6 +219,12 @@ impl Panels {
                     let d = response.drag_delta();
                     self.yaw -= d.x * 0.01;
                     self.pitch = (self.pitch + d.y * 0.01).clamp(-1.45, 1.45);
+                }
+                if response.hovered() {
+                    let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+                    if scroll != 0.0 {
+                        self.zoom(scroll / 40.0);
+                    }
                 }
             }
         });
