@@ -214,7 +214,7 @@ fn every_committed_sweep_file_expands() {
             "{}: suite size applies",
             s.name
         );
-        assert_eq!(s.counter, Some((48, 48)));
+        assert_eq!(s.counter, Some((24, 24)));
     }
     for name in [
         "quick",

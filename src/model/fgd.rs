@@ -3,8 +3,6 @@
 //! (`tables::split_sum::SplitSumTable` for `fgd=karis`), so the model can run on the CPU with
 //! exactly what the shader samples.
 
-use glam::DVec3;
-
 use super::{fresnel, microfacet, Fgd};
 use crate::shader::G2;
 
@@ -35,25 +33,13 @@ impl Fgd for ExactFgd {
         if alpha < 1e-4 {
             return fresnel::conductor(mu, eta, kappa);
         }
-        let wi = DVec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
         let g1 = microfacet::masking_g1(self.g2, mu, alpha);
         let n = self.resolution;
         let mut sum = 0.0;
-        for a in 0..n {
-            for b in 0..n {
-                let u = (
-                    (f64::from(a) + 0.5) / f64::from(n),
-                    (f64::from(b) + 0.5) / f64::from(n),
-                );
-                let h = microfacet::sample_vndf(wi, u, alpha);
-                let wo = microfacet::reflect(wi, h);
-                if wo.z <= 0.0 {
-                    continue;
-                }
-                let f = fresnel::conductor(wi.dot(h).clamp(0.0, 1.0), eta, kappa);
-                sum += f * microfacet::masking_shadowing(self.g2, mu, wo.z, alpha) / g1;
-            }
-        }
+        microfacet::for_each_vndf_sample(mu, alpha, n, |wi, h, wo| {
+            let f = fresnel::conductor(wi.dot(h).clamp(0.0, 1.0), eta, kappa);
+            sum += f * microfacet::masking_shadowing(self.g2, mu, wo.z, alpha) / g1;
+        });
         sum / f64::from(n * n)
     }
 }

@@ -81,6 +81,28 @@ pub fn sample_vndf(v: DVec3, u: (f64, f64), alpha: f64) -> DVec3 {
     DVec3::new(alpha * nh.x, alpha * nh.y, nh.z.max(0.0)).normalize()
 }
 
+/// Calls `f(v, h, l)` over an `n`×`n` midpoint grid of the visible-normal sampler's two
+/// uniform variables, for the view v = (√(1−μ²), 0, μ): h ~ D_v(h), l = reflect(v, h), and
+/// only where l is above the surface. The mean of a weight w over the grid (the sum divided
+/// by n²) estimates ∫ w(l) G1(v) D(h) / (4μ) dω_l, the reflected directions' pdf; the CPU
+/// references of the tables are such means (w = F·G2/G1 gives FGD).
+pub fn for_each_vndf_sample(mu: f64, alpha: f64, n: u32, mut f: impl FnMut(DVec3, DVec3, DVec3)) {
+    let v = DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+    for a in 0..n {
+        for b in 0..n {
+            let u = (
+                (f64::from(a) + 0.5) / f64::from(n),
+                (f64::from(b) + 0.5) / f64::from(n),
+            );
+            let h = sample_vndf(v, u, alpha);
+            let l = reflect(v, h);
+            if l.z > 0.0 {
+                f(v, h, l);
+            }
+        }
+    }
+}
+
 /// Mirror of `-v` about `h`: the reflected direction.
 pub fn reflect(v: DVec3, h: DVec3) -> DVec3 {
     2.0 * v.dot(h) * h - v

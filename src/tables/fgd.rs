@@ -16,8 +16,6 @@
 
 use std::path::Path;
 
-use glam::DVec3;
-
 use crate::error::{Error, Result};
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::microfacet;
@@ -466,27 +464,15 @@ impl BelcourTable {
 /// L_k(μ, α) for k = 0..3 in f64 by an `n`×`n` midpoint rule over the visible-normal
 /// sampler's uniform variables: the oracle of the Belcour table.
 pub fn belcour_reference(basis: &Basis, mu: f64, alpha: f64, g2: G2, n: u32) -> [f64; 4] {
-    let v = DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
     let g1_v = microfacet::masking_g1(g2, mu, alpha);
     let mut sum = [0.0f64; 4];
-    for a in 0..n {
-        for b in 0..n {
-            let u = (
-                (f64::from(a) + 0.5) / f64::from(n),
-                (f64::from(b) + 0.5) / f64::from(n),
-            );
-            let h = microfacet::sample_vndf(v, u, alpha);
-            let l = microfacet::reflect(v, h);
-            if l.z <= 0.0 {
-                continue;
-            }
-            let w = microfacet::masking_shadowing(g2, mu, l.z, alpha) / g1_v;
-            let c = v.dot(h);
-            for (k, s) in sum.iter_mut().enumerate() {
-                *s += w * basis.at(k, c);
-            }
+    microfacet::for_each_vndf_sample(mu, alpha, n, |v, h, l| {
+        let w = microfacet::masking_shadowing(g2, mu, l.z, alpha) / g1_v;
+        let c = v.dot(h);
+        for (k, s) in sum.iter_mut().enumerate() {
+            *s += w * basis.at(k, c);
         }
-    }
+    });
     sum.map(|s| s / f64::from(n * n))
 }
 

@@ -6,7 +6,6 @@
 //! texel centres land exactly on those values. The GPU estimate uses Hammersley points with
 //! visible-normal sampling; [`cpu_reference`] integrates the same quantity in f64.
 
-use glam::DVec3;
 use half::f16;
 
 use crate::error::Result;
@@ -181,26 +180,14 @@ impl crate::model::Fgd for SplitSumTable {
 /// (A, B) at view cosine `mu` and GGX `alpha` by an `n`×`n` stratified midpoint rule over the
 /// visible-normal distribution, in f64: the oracle for the GPU table.
 pub fn cpu_reference(mu: f64, alpha: f64, g2: G2, n: u32) -> [f64; 2] {
-    let v = DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
     let g1_v = microfacet::masking_g1(g2, mu, alpha);
     let mut sum = [0.0f64; 2];
-    for a in 0..n {
-        for b in 0..n {
-            let u = (
-                (f64::from(a) + 0.5) / f64::from(n),
-                (f64::from(b) + 0.5) / f64::from(n),
-            );
-            let h = microfacet::sample_vndf(v, u, alpha);
-            let l = microfacet::reflect(v, h);
-            if l.z <= 0.0 {
-                continue;
-            }
-            let w = microfacet::masking_shadowing(g2, mu, l.z, alpha) / g1_v;
-            let fc = (1.0 - v.dot(h).clamp(0.0, 1.0)).powi(5);
-            sum[0] += (1.0 - fc) * w;
-            sum[1] += fc * w;
-        }
-    }
+    microfacet::for_each_vndf_sample(mu, alpha, n, |v, h, l| {
+        let w = microfacet::masking_shadowing(g2, mu, l.z, alpha) / g1_v;
+        let fc = (1.0 - v.dot(h).clamp(0.0, 1.0)).powi(5);
+        sum[0] += (1.0 - fc) * w;
+        sum[1] += fc * w;
+    });
     let count = f64::from(n * n);
     [sum[0] / count, sum[1] / count]
 }

@@ -8,7 +8,6 @@
 //! u = (x·(n−1) + ½)/n and a trilinear filter, which lands texel centres on the grid.
 //! [`cpu_reference`] integrates the same quantity in f64.
 
-use glam::DVec3;
 use half::f16;
 
 use std::path::Path;
@@ -264,31 +263,18 @@ impl crate::model::Tir for TableTir<'_> {
 /// uniform variables (the same estimator as the GPU's, with a regular grid instead of
 /// Hammersley points).
 pub fn cpu_reference(mu: f64, alpha: f64, eta: f64, n: u32) -> f64 {
-    let mu = mu.max(1e-3);
-    let v = DVec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
     let (mut trapped, mut total) = (0.0, 0.0);
-    for a in 0..n {
-        for b in 0..n {
-            let u = (
-                (f64::from(a) + 0.5) / f64::from(n),
-                (f64::from(b) + 0.5) / f64::from(n),
-            );
-            let h = microfacet::sample_vndf(v, u, alpha);
-            let o = microfacet::reflect(v, h);
-            if o.z <= 0.0 {
-                continue;
-            }
-            let w = if alpha > 0.0 {
-                microfacet::masking_g1(G2::Smith, o.z, alpha)
-            } else {
-                1.0
-            };
-            total += w;
-            if o.z * o.z < 1.0 - eta * eta {
-                trapped += w;
-            }
+    microfacet::for_each_vndf_sample(mu.max(1e-3), alpha, n, |_, _, o| {
+        let w = if alpha > 0.0 {
+            microfacet::masking_g1(G2::Smith, o.z, alpha)
+        } else {
+            1.0
+        };
+        total += w;
+        if o.z * o.z < 1.0 - eta * eta {
+            trapped += w;
         }
-    }
+    });
     if total > 0.0 {
         trapped / total
     } else {

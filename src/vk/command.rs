@@ -465,12 +465,27 @@ pub fn submit_and_wait<R>(
     let mut recorder = Recorder::begin(device, cmd)?;
     let value = record(&mut recorder)?;
     recorder.end()?;
+    submit_blocking(device, cmd, &[], &[])?;
+    drop(recorder);
+    Ok(value)
+}
 
+/// Submits the recorded `cmd` once, waiting on and signalling the given semaphores, and waits
+/// for it to complete: what the command references may be released when this returns.
+pub(crate) fn submit_blocking(
+    device: &Arc<Device>,
+    cmd: vk::CommandBuffer,
+    waits: &[vk::SemaphoreSubmitInfo<'_>],
+    signals: &[vk::SemaphoreSubmitInfo<'_>],
+) -> VkResult<()> {
     let fence = Fence::new(device)?;
     let cmd_infos = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
-    let submit = vk::SubmitInfo2::default().command_buffer_infos(&cmd_infos);
+    let submit = vk::SubmitInfo2::default()
+        .command_buffer_infos(&cmd_infos)
+        .wait_semaphore_infos(waits)
+        .signal_semaphore_infos(signals);
     // SAFETY: the command buffer is executable; resources it references are held by the caller
-    // or by the recorder's graveyard until the fence wait below returns.
+    // (or a recorder's graveyard) until the fence wait below returns.
     unsafe {
         device
             .raw
@@ -479,10 +494,8 @@ pub fn submit_and_wait<R>(
         device
             .raw
             .wait_for_fences(&[fence.raw], true, u64::MAX)
-            .check("vkWaitForFences")?;
+            .check("vkWaitForFences")
     }
-    drop(recorder);
-    Ok(value)
 }
 
 impl<'d> Recorder<'d> {

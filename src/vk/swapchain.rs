@@ -9,7 +9,7 @@ use std::sync::Arc;
 use ash::vk;
 use raw_window_handle::{RawDisplayHandle, RawWindowHandle};
 
-use super::command::{CommandPool, Fence, Recorder};
+use super::command::{submit_blocking, CommandPool, Recorder};
 use super::device::Device;
 use super::error::{Check, VkError, VkResult};
 use super::{Buffer, ImageState};
@@ -398,30 +398,13 @@ pub fn submit_frame<R>(
     let mut recorder = Recorder::begin(device, cmd)?;
     let value = record(&mut recorder)?;
     recorder.end()?;
-    let fence = Fence::new(device)?;
-    let cmd_infos = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
     let waits = [vk::SemaphoreSubmitInfo::default()
         .semaphore(acquired.raw)
         .stage_mask(vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT)];
     let signals = [vk::SemaphoreSubmitInfo::default()
         .semaphore(swapchain.rendered[index as usize].raw)
         .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)];
-    let submit = vk::SubmitInfo2::default()
-        .command_buffer_infos(&cmd_infos)
-        .wait_semaphore_infos(&waits)
-        .signal_semaphore_infos(&signals);
-    // SAFETY: the command buffer is executable; what it references is held by the caller or the
-    // recorder's graveyard until the fence wait below returns.
-    unsafe {
-        device
-            .raw
-            .queue_submit2(device.queue, &[submit], fence.raw)
-            .check("vkQueueSubmit2")?;
-        device
-            .raw
-            .wait_for_fences(&[fence.raw], true, u64::MAX)
-            .check("vkWaitForFences")?;
-    }
+    submit_blocking(device, cmd, &waits, &signals)?;
     drop(recorder);
     Ok(value)
 }
