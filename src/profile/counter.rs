@@ -116,6 +116,62 @@ pub fn count_instructions(
     result
 }
 
+/// Writes the worker's job file (the cases' variants and stacks) into `dir`.
+fn write_job(dir: &Path, cases: &[Case]) -> Result<PathBuf> {
+    let stacks = dir.join("stacks.json");
+    let job = serde_json::to_string(&WorkerJob::from_cases(cases))
+        .map_err(|e| Error::Unsupported(format!("encoding the worker's job: {e}")))?;
+    std::fs::write(&stacks, job).map_err(|e| io_error(&stacks, e))?;
+    Ok(stacks)
+}
+
+/// The native worker that draws every case of `job` once (`--warm`).
+fn warm_command(request: &CountRequest<'_>, job: &Path) -> Command {
+    let mut command = Command::new(request.exe);
+    command
+        .args(&request.global_args)
+        .arg("count-worker")
+        .arg("--warm")
+        .arg("--job")
+        .arg(job)
+        .arg("--env")
+        .arg(request.env_map)
+        .arg("--size")
+        .arg(format!("{}x{}", request.width, request.height))
+        .env("LP_NUM_THREADS", "0");
+    command
+}
+
+/// A native warm-up worker running in the background ([`prewarm`]); dropping it stops it.
+pub struct Prewarm {
+    child: std::process::Child,
+    dir: PathBuf,
+}
+
+/// Starts drawing every case of `request` once in a background process, so that llvmpipe's
+/// first-draw compilation of their shaders (49 s for the 6-flux shader at `max_layers=8`,
+/// profiling/README.md) lands in Mesa's shader cache on another core while the caller times
+/// other variants. Give it the cases the caller reaches last first.
+pub fn prewarm(request: &CountRequest<'_>) -> Result<Prewarm> {
+    let dir = scratch_dir()?;
+    let job = write_job(&dir, request.cases)?;
+    let child = warm_command(request, &job)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .map_err(|e| Error::Unsupported(format!("starting the background warm-up: {e}")))?;
+    Ok(Prewarm { child, dir })
+}
+
+impl Drop for Prewarm {
+    fn drop(&mut self) {
+        // Warming only fills a cache: stopping it early loses nothing but time.
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
 fn scratch_dir() -> Result<PathBuf> {
     let stamp = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
@@ -131,21 +187,8 @@ fn run_worker(
     dir: &Path,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<Counts>> {
-    let stacks = dir.join("stacks.json");
-    let job = serde_json::to_string(&WorkerJob::from_cases(request.cases))
-        .map_err(|e| Error::Unsupported(format!("encoding the worker's job: {e}")))?;
-    std::fs::write(&stacks, job).map_err(|e| io_error(&stacks, e))?;
-    let warm = Command::new(request.exe)
-        .args(&request.global_args)
-        .arg("count-worker")
-        .arg("--warm")
-        .arg("--job")
-        .arg(&stacks)
-        .arg("--env")
-        .arg(request.env_map)
-        .arg("--size")
-        .arg(format!("{}x{}", request.width, request.height))
-        .env("LP_NUM_THREADS", "0")
+    let stacks = write_job(dir, request.cases)?;
+    let warm = warm_command(request, &stacks)
         .output()
         .map_err(|e| Error::Unsupported(format!("starting the counter's warm-up: {e}")))?;
     if !warm.status.success() {
