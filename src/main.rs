@@ -151,9 +151,6 @@ struct ReportArgs {
 struct CountWorkerArgs {
     #[arg(long, value_name = "FILE")]
     job: PathBuf,
-    /// Only build and draw each case once (natively, to fill Mesa's shader cache).
-    #[arg(long)]
-    warm: bool,
     #[arg(long, value_name = "FILE")]
     env: PathBuf,
     #[arg(long, value_name = "WxH")]
@@ -791,40 +788,6 @@ fn run_sweep(cli: &Cli, args: &SweepArgs) -> Result<()> {
     } else {
         None
     };
-    // lavapipe compiles each shader at its first draw, on the CPU that submits it. With a
-    // second core, a background worker draws the later studies' variants (last study first)
-    // so that their compilation overlaps the timing of the earlier ones; timings taken while
-    // it runs share the machine with it (see profiling/README.md).
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let _prewarm = match &setup {
-        Some(setup) if studies.len() > 1 && cores > 1 => {
-            let mut seen = std::collections::HashSet::new();
-            let cases: Vec<Case> = studies
-                .iter()
-                .rev()
-                .flat_map(|s| {
-                    let config = BenchConfig {
-                        cases: s.points.iter().map(|p| p.case.clone()).collect(),
-                        width: s.width,
-                        height: s.height,
-                        frames: s.frames,
-                        warmup: s.warmup,
-                    };
-                    config.with_baselines()
-                })
-                .filter(|c| seen.insert(c.variant))
-                .collect();
-            Some(counter::prewarm(&counter::CountRequest {
-                exe: &setup.exe,
-                global_args: setup.global_args.clone(),
-                env_map: &setup.env_map,
-                cases: &cases,
-                width: 16,
-                height: 16,
-            })?)
-        }
-        _ => None,
-    };
     let started = std::time::Instant::now();
     let mut written = Vec::new();
     for (k, study) in studies.iter().enumerate() {
@@ -1078,19 +1041,7 @@ fn count_worker(cli: &Cli, args: &CountWorkerArgs) -> Result<()> {
         .collect::<Result<Vec<_>>>()?;
     let equirect = imageio::read_exr(&args.env).context("reading the environment map")?;
     let gpu = open_gpu(cli)?;
-    let mode = if args.warm {
-        counter::WorkerMode::Warm
-    } else {
-        counter::WorkerMode::Count
-    };
-    counter::worker(
-        &gpu,
-        &equirect,
-        &cases,
-        args.size.width,
-        args.size.height,
-        mode,
-    )?;
+    counter::worker(&gpu, &equirect, &cases, args.size.width, args.size.height)?;
     check_validation(&gpu)
 }
 

@@ -38,17 +38,6 @@ const DUMP_PREFIX: &str = "lamina-case-";
 /// The line the worker prints on stderr after each case, read by the parent for progress.
 const PROGRESS_PREFIX: &str = "lamina-counted ";
 
-/// What the worker does.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum WorkerMode {
-    /// Natively, first: build every pipeline and draw it once, so Mesa's shader disk cache holds
-    /// the compiled shaders and the run under valgrind loads them instead of running LLVM's
-    /// code generation ten times slower.
-    Warm,
-    /// Under callgrind: count each case's shaded draw.
-    Count,
-}
-
 /// Runs in `lamina count-worker`.
 pub fn worker(
     gpu: &Gpu,
@@ -56,9 +45,8 @@ pub fn worker(
     cases: &[Case],
     width: u32,
     height: u32,
-    mode: WorkerMode,
 ) -> Result<()> {
-    if mode == WorkerMode::Count && !callgrind::running() {
+    if !callgrind::running() {
         return Err(Error::Unsupported(
             "count-worker only counts under `valgrind --tool=callgrind --instr-atstart=no`; \
              use `lamina bench --counter instructions` or a sweep with `counter = \"instructions\"`"
@@ -125,53 +113,6 @@ fn write_job(dir: &Path, cases: &[Case]) -> Result<PathBuf> {
     Ok(stacks)
 }
 
-/// The native worker that draws every case of `job` once (`--warm`).
-fn warm_command(request: &CountRequest<'_>, job: &Path) -> Command {
-    let mut command = Command::new(request.exe);
-    command
-        .args(&request.global_args)
-        .arg("count-worker")
-        .arg("--warm")
-        .arg("--job")
-        .arg(job)
-        .arg("--env")
-        .arg(request.env_map)
-        .arg("--size")
-        .arg(format!("{}x{}", request.width, request.height))
-        .env("LP_NUM_THREADS", "0");
-    command
-}
-
-/// A native warm-up worker running in the background ([`prewarm`]); dropping it stops it.
-pub struct Prewarm {
-    child: std::process::Child,
-    dir: PathBuf,
-}
-
-/// Starts drawing every case of `request` once in a background process, so that llvmpipe's
-/// first-draw compilation of their shaders (49 s for the 6-flux shader at `max_layers=8`,
-/// profiling/README.md) lands in Mesa's shader cache on another core while the caller times
-/// other variants. Give it the cases the caller reaches last first.
-pub fn prewarm(request: &CountRequest<'_>) -> Result<Prewarm> {
-    let dir = scratch_dir()?;
-    let job = write_job(&dir, request.cases)?;
-    let child = warm_command(request, &job)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .map_err(|e| Error::Unsupported(format!("starting the background warm-up: {e}")))?;
-    Ok(Prewarm { child, dir })
-}
-
-impl Drop for Prewarm {
-    fn drop(&mut self) {
-        // Warming only fills a cache: stopping it early loses nothing but time.
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-        let _ = std::fs::remove_dir_all(&self.dir);
-    }
-}
-
 fn scratch_dir() -> Result<PathBuf> {
     let stamp = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
@@ -188,16 +129,6 @@ fn run_worker(
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<Counts>> {
     let stacks = write_job(dir, request.cases)?;
-    let warm = warm_command(request, &stacks)
-        .output()
-        .map_err(|e| Error::Unsupported(format!("starting the counter's warm-up: {e}")))?;
-    if !warm.status.success() {
-        return Err(Error::Unsupported(format!(
-            "the counter's warm-up run failed ({}): {}",
-            warm.status,
-            String::from_utf8_lossy(&warm.stderr)
-        )));
-    }
     let out_file = dir.join("callgrind.out");
     let mut command = Command::new("valgrind");
     command
