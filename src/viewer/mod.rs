@@ -98,7 +98,11 @@ pub fn run(options: ViewOptions) -> Result<ViewReport> {
             message: "no such environment map".into(),
         });
     }
-    let panels = Panels::new(&options, gpu.device.report.name.clone())?;
+    let panels = Panels::new(
+        &options,
+        gpu.device.report.name.clone(),
+        gpu.device.supports_fp16(),
+    )?;
     let (request_tx, request_rx) = channel();
     let (reply_tx, reply_rx) = channel();
     let (instance, selector, env) = (

@@ -58,7 +58,7 @@ pub struct Panels {
 }
 
 impl Panels {
-    pub fn new(options: &ViewOptions, device: String) -> Result<Self> {
+    pub fn new(options: &ViewOptions, device: String, fp16_supported: bool) -> Result<Self> {
         let presets = presets()
             .into_iter()
             .filter_map(|p| Some((p.file_stem()?.to_string_lossy().into_owned(), p)))
@@ -100,7 +100,7 @@ impl Panels {
             history: VecDeque::with_capacity(HISTORY),
             invocations: None,
             device,
-            fp16_supported: true,
+            fp16_supported,
             yaw: (camera.eye.x).atan2(camera.eye.z),
             pitch: (camera.eye.y / distance).asin(),
             distance,
@@ -150,9 +150,6 @@ impl Panels {
                 // Back to what runs, so the message stays until the next change.
                 if let Some(c) = self.compiled {
                     self.requested = c;
-                }
-                if e.contains("fp16") {
-                    self.fp16_supported = false;
                 }
             }
         }
