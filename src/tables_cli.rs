@@ -144,9 +144,11 @@ fn full_4d(gpu: &Gpu, args: &TablesArgs, samples: u32) -> Result<()> {
     );
     if args.size == fgd::SIZE {
         let images = FgdImages::stacked(gpu, Fgd::Full4d, &grid, Filter::Box)?;
-        let (err, _) = hardware_at_vertices(gpu, Fgd::Full4d, &images, &grid, |i, j, k, l| {
-            f64::from(grid.texel(i, j, k, l))
-        })?;
+        let probe = FgdProbe::new(gpu, Fgd::Full4d)?;
+        let err =
+            hardware_at_vertices(&probe, &split_table(gpu)?, &images, &grid, |i, j, k, l| {
+                f64::from(grid.texel(i, j, k, l))
+            })?;
         println!(
             "the shader's lookup (64×64×4096 image, two trilinear fetches) at {} vertices: \
              max |Δ| {:.2e} from the texels, at (μ, α, η, κ) = {:.3?}",
@@ -168,12 +170,7 @@ fn resampled(gpu: &Gpu, args: &TablesArgs, samples: u32) -> Result<()> {
         );
     }
     let grid = load_grid(gpu, GridKind::Full4d, args, samples)?;
-    let split = split_sum::SplitSumTable::load_or_build(
-        gpu,
-        G2_FORM,
-        split_sum::DEFAULT_SIZE,
-        split_sum::DEFAULT_SAMPLES,
-    )?;
+    let split = split_table(gpu)?;
     let points = fgd_study::probe_points(PROBE_POINTS, fgd::ETA_MAX, fgd::KAPPA_MAX);
     let full = match FgdImages::stacked(gpu, Fgd::Full4d, &grid, Filter::Box) {
         Ok(images) => Some(FgdProbe::new(gpu, Fgd::Full4d)?.sample(&split, &images, &points)?),
@@ -208,7 +205,7 @@ fn resampled(gpu: &Gpu, args: &TablesArgs, samples: u32) -> Result<()> {
             }
             None => "-".into(),
         };
-        let (hw, _) = hardware_at_vertices(gpu, Fgd::Resampled4d, &images, &grid, |i, j, k, l| {
+        let hw = hardware_at_vertices(&probe, &split, &images, &grid, |i, j, k, l| {
             fgd::resampled_at(&grid, &table, i, j, k, grid.coordinates(i, j, k, l)[3])
         })?;
         let w = err.worst_at;
@@ -252,19 +249,12 @@ fn resampled(gpu: &Gpu, args: &TablesArgs, samples: u32) -> Result<()> {
 /// The shader's lookup (`fgd_probe.comp.glsl`) at every vertex with even μ and α indices
 /// (a quarter of them), against `expected(i, j, k, l)`.
 fn hardware_at_vertices(
-    gpu: &Gpu,
-    mode: Fgd,
+    probe: &FgdProbe<'_>,
+    split: &SplitSumTable,
     images: &FgdImages,
     grid: &Grid,
     expected: impl Fn(u32, u32, u32, u32) -> f64,
-) -> Result<(Errors, usize)> {
-    let split = split_sum::SplitSumTable::load_or_build(
-        gpu,
-        G2_FORM,
-        split_sum::DEFAULT_SIZE,
-        split_sum::DEFAULT_SAMPLES,
-    )?;
-    let probe = FgdProbe::new(gpu, mode)?;
+) -> Result<Errors> {
     let [nm, na, ne, nk] = grid.dims;
     let mut errors = Errors::default();
     for l in 0..nk {
@@ -279,13 +269,22 @@ fn hardware_at_vertices(
                 }
             }
         }
-        let values = probe.sample(&split, images, &points)?;
+        let values = probe.sample(split, images, &points)?;
         for (v, (i, j, k, at)) in values.iter().zip(index) {
             errors.add(f64::from(*v) - expected(i, j, k, l), at);
         }
     }
-    let points = errors.points;
-    Ok((errors, points))
+    Ok(errors)
+}
+
+/// The split-sum table the probes bind (unused by the FGD modes measured here, but bound).
+fn split_table(gpu: &Gpu) -> Result<SplitSumTable> {
+    Ok(SplitSumTable::load_or_build(
+        gpu,
+        G2_FORM,
+        split_sum::DEFAULT_SIZE,
+        split_sum::DEFAULT_SAMPLES,
+    )?)
 }
 
 fn belcour(gpu: &Gpu, args: &TablesArgs, samples: u32) -> Result<()> {
@@ -348,12 +347,7 @@ fn belcour(gpu: &Gpu, args: &TablesArgs, samples: u32) -> Result<()> {
     // The accuracy study: every fgd value against exact FGD at the same points.
     let points = fgd_study::exact_points(G2_FORM, EXACT_RESOLUTION);
     let probe_input: Vec<[f32; 4]> = points.iter().map(|p| p.0.map(|v| v as f32)).collect();
-    let split = split_sum::SplitSumTable::load_or_build(
-        gpu,
-        G2_FORM,
-        split_sum::DEFAULT_SIZE,
-        split_sum::DEFAULT_SAMPLES,
-    )?;
+    let split = split_table(gpu)?;
     let mut columns: Vec<(String, Vec<f64>)> = vec![(
         "belcour, basis only".into(),
         points

@@ -126,6 +126,22 @@ struct GridPush {
     pad: [u32; 2],
 }
 
+/// A table-building kernel specialised for the G2 form `g2` (its other constants default).
+fn g2_kernel(
+    gpu: &Gpu,
+    entry: &str,
+    bindings: &[BindingKind],
+    push_bytes: u32,
+    g2: G2,
+) -> Result<ComputeKernel> {
+    let spec = VariantKey {
+        g2,
+        ..VariantKey::default()
+    }
+    .spec();
+    ComputeKernel::new(gpu, entry, bindings, push_bytes, &spec)
+}
+
 /// The disk-cache key of a grid.
 pub fn grid_cache_key(kind: GridKind, g2: G2, n: u32, samples: u32) -> cache::Key {
     cache::Key {
@@ -185,17 +201,12 @@ pub fn build_grid(
     }
     let dims = kind.dims(n);
     let (eta, kappa) = kind.ranges();
-    let spec = VariantKey {
-        g2,
-        ..VariantKey::default()
-    }
-    .spec();
-    let kernel = ComputeKernel::new(
+    let kernel = g2_kernel(
         gpu,
         "fgd_table.comp.glsl",
         &[BindingKind::StorageBuffer],
         std::mem::size_of::<GridPush>() as u32,
-        &spec,
+        g2,
     )?;
     let device = &gpu.device;
     let count: u64 = dims.iter().map(|&d| u64::from(d)).product();
@@ -366,17 +377,12 @@ impl BelcourTable {
                  texels and at least 1 sample"
             )));
         }
-        let spec = VariantKey {
-            g2,
-            ..VariantKey::default()
-        }
-        .spec();
-        let kernel = ComputeKernel::new(
+        let kernel = g2_kernel(
             gpu,
             "fgd_belcour.comp.glsl",
             &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
             std::mem::size_of::<BelcourPush>() as u32,
-            &spec,
+            g2,
         )?;
         let device = &gpu.device;
         let out = Buffer::new(
