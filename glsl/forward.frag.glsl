@@ -44,20 +44,29 @@ vec3 shade_ggx(vec3 n, vec3 v, float n_dot_v) {
     return vec3(real3(lobe_radiance(n, reflect(-v, n), alpha)) * albedo);
 }
 
+// The point being shaded, for tm_emit_lobe: the models emit their lobes one by one and each
+// is lit as it comes.
+vec3 shade_n;
+vec3 shade_v;
+vec3 shade_sum;
+
+void tm_emit_lobe(vec3 weight, float alpha, uint kind) {
+    vec3 around = kind == LOBE_RETRO ? shade_v : reflect(-shade_v, shade_n);
+    shade_sum += weight * lobe_radiance(shade_n, around, alpha);
+}
+
 vec3 shade_lobes(vec3 n, vec3 v, float n_dot_v) {
-    Lobe lobes[TM_MAX_LOBES];
+    shade_n = n;
+    shade_v = v;
+    shade_sum = vec3(0.0);
     vec3 reflectance;
     vec3 transmittance;
-    uint count = MODEL == MODEL_TM6
-        ? tm6_evaluate(material, n_dot_v, lobes, reflectance, transmittance)
-        : tm2_evaluate(material, n_dot_v, lobes, reflectance, transmittance);
-    vec3 mirror = reflect(-v, n);
-    vec3 sum = vec3(0.0);
-    for (uint k = 0u; k < count; ++k) {
-        vec3 around = lobes[k].kind == LOBE_RETRO ? v : mirror;
-        sum += lobes[k].weight * lobe_radiance(n, around, lobes[k].alpha);
+    if (MODEL == MODEL_TM6) {
+        tm6_evaluate(material, n_dot_v, reflectance, transmittance);
+    } else {
+        tm2_evaluate(material, n_dot_v, reflectance, transmittance);
     }
-    return sum;
+    return shade_sum;
 }
 
 void main() {

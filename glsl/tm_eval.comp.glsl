@@ -29,22 +29,31 @@ layout(push_constant) uniform Push {
 #include "lib/tm2.glsl"
 #include "lib/tm6.glsl"
 
+// Where tm_emit_lobe writes: the sample's lobe slots and how many are filled.
+uint lobe_base;
+uint lobe_count;
+
+void tm_emit_lobe(vec3 weight, float alpha, uint kind) {
+    if (lobe_count < TM_MAX_LOBES) {
+        results.values[lobe_base + lobe_count] = vec4(weight, alpha);
+    }
+    lobe_count++;
+}
+
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= push.sample_count) {
         return;
     }
-    Lobe lobes[TM_MAX_LOBES];
+    uint base = i * push.stride;
+    lobe_base = base + 2u;
+    lobe_count = 0u;
     vec3 reflectance;
     vec3 transmittance;
     float mu = samples.cos_theta[i];
     uint count = MODEL == MODEL_TM6
-        ? tm6_evaluate(material, mu, lobes, reflectance, transmittance)
-        : tm2_evaluate(material, mu, lobes, reflectance, transmittance);
-    uint base = i * push.stride;
+        ? tm6_evaluate(material, mu, reflectance, transmittance)
+        : tm2_evaluate(material, mu, reflectance, transmittance);
     results.values[base] = vec4(reflectance, float(count));
     results.values[base + 1u] = vec4(transmittance, 0.0);
-    for (uint k = 0u; k < count; ++k) {
-        results.values[base + 2u + k] = vec4(lobes[k].weight, lobes[k].alpha);
-    }
 }

@@ -85,10 +85,10 @@ void tm2_factors(MaterialGpu material, float mu, inout Tm2Factors comps[MAX_LAYE
     }
 }
 
-// Pass 2: compose the matrices top to bottom and emit one lobe per layer (§4.2–4.6).
-// Returns the lobe count (= layers); `reflectance` and `transmittance` get the stack totals.
-uint tm2_evaluate(MaterialGpu material, float mu, inout Lobe lobes[TM_MAX_LOBES],
-                  out vec3 reflectance, out vec3 transmittance) {
+// Pass 2: compose the matrices top to bottom and emit one lobe per layer through tm_emit_lobe
+// (§4.2–4.6). Returns the lobe count (= layers); `reflectance` and `transmittance` get the
+// stack totals.
+uint tm2_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3 transmittance) {
     Tm2Factors comps[MAX_LAYERS];
     uint count;
     tm2_factors(material, mu, comps, count);
@@ -139,7 +139,7 @@ uint tm2_evaluate(MaterialGpu material, float mu, inout Lobe lobes[TM_MAX_LOBES]
         real3 weight = r_total - r_prev;
         real energy = tm_avg(weight);
         float lobe_g = energy > real(0.0) ? min(float((g_total - g_prev) / energy), 1.0) : 0.0;
-        lobes[i] = Lobe(vec3(weight), hg_alpha_of_g(lobe_g), LOBE_MIRROR);
+        tm_emit_lobe(vec3(weight), hg_alpha_of_g(lobe_g), LOBE_MIRROR);
         r_prev = r_total;
         g_prev = g_total;
         g_t0i = g_t0j;

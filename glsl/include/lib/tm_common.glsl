@@ -19,14 +19,14 @@ const float IOR_AIR = 1.0;
 #define LOBE_RETRO 1u
 
 // Largest lobe count of a variant: one per layer (2-flux), three per component (6-flux:
-// interface, medium, …, substrate).
+// interface, medium, …, substrate). src/render/eval.rs sizes its output by it.
 const uint TM_MAX_LOBES = MODEL == MODEL_TM6 ? 3u * (2u * MAX_LAYERS - 1u) : MAX_LAYERS;
 
-struct Lobe {
-    vec3 weight;   // RGB energy (directional albedo)
-    float alpha;   // GGX roughness
-    uint kind;     // LOBE_MIRROR or LOBE_RETRO
-};
+// Each model hands every lobe it finds, top to bottom, to this function, which the including
+// shader defines (the forward pass shades it, tm_eval stores it): the lobes are not collected
+// in an array first.
+//   weight: RGB energy (directional albedo), alpha: GGX roughness, kind: LOBE_MIRROR or LOBE_RETRO
+void tm_emit_lobe(vec3 weight, float alpha, uint kind);
 
 // A 2×2 transfer matrix per RGB channel, mapping the fluxes below a component to those above.
 struct TmMatrix {
