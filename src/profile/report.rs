@@ -1,11 +1,14 @@
 //! `lamina report DIR…`: profiling/REPORT.md from committed sweep results — per study our
 //! table and chart beside the talk's published figures, compared as ratios (absolute times of
-//! different machines do not compare; ratios within one run do).
+//! different machines do not compare; ratios within one run do), and a reading of them: which
+//! figures agree, and the device effects the data itself shows (lavapipe's draw-time shader
+//! rebuild, its fp16 emulation).
 
 use std::fmt::Write as _;
 use std::path::{Component, Path, PathBuf};
 
 use crate::error::{Error, Result};
+use crate::shader::variant::VariantKey;
 
 use super::bench::{Results, Run};
 use super::sweep::{key_matches, StudyMeta};
@@ -270,6 +273,14 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
     if m.fit {
         fit_section(md, s);
     }
+    let reading = reading(s);
+    if !reading.is_empty() {
+        let _ = writeln!(md, "Reading:\n");
+        for line in reading {
+            let _ = writeln!(md, "- {line}");
+        }
+        md.push('\n');
+    }
     if !m.skipped.is_empty() {
         let _ = writeln!(
             md,
@@ -279,16 +290,21 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
     }
 }
 
-fn published_section(md: &mut String, s: &StudyDir) {
+/// The run a published figure's `match` pattern names: the first study point that matches,
+/// else the first run.
+fn published_run<'a>(s: &'a StudyDir, pattern: &str) -> Option<&'a Run> {
     let r = &s.results;
+    s.meta
+        .points
+        .iter()
+        .map(|p| &r.runs[p.run])
+        .chain(r.runs.iter())
+        .find(|run| key_matches(&run.variant, pattern))
+}
+
+fn published_section(md: &mut String, s: &StudyDir) {
     let m = &s.meta;
-    let find = |pattern: &str| {
-        m.points
-            .iter()
-            .map(|p| &r.runs[p.run])
-            .chain(r.runs.iter())
-            .find(|run| key_matches(&run.variant, pattern))
-    };
+    let find = |pattern: &str| published_run(s, pattern);
     let first = &m.published[0];
     let first_run = find(&first.matches);
     let _ = writeln!(
@@ -327,6 +343,164 @@ fn published_section(md: &mut String, s: &StudyDir) {
         );
     }
     md.push('\n');
+}
+
+/// A ratio of ours within this fraction of the talk's agrees with it.
+const AGREEMENT: f64 = 0.15;
+/// A run executing more than this many times the baseline's instructions outside the JIT code
+/// is one lavapipe rebuilds at every draw (profiling/README.md).
+const REBUILD_OVERHEAD: f64 = 3.0;
+
+fn verdict(ours: Option<f64>, talk: f64) -> String {
+    match ours {
+        None => "not measured".into(),
+        Some(x) if (x / talk - 1.0).abs() <= AGREEMENT => format!("{x:.2}×, agrees"),
+        Some(x) => format!("{x:.2}×, {:.2}× the talk's", x / talk),
+    }
+}
+
+fn is_llvmpipe(r: &super::bench::Results) -> bool {
+    r.device.name.contains("llvmpipe") || r.device.driver.contains("llvmpipe")
+}
+
+/// The study's reading, one statement per line: each published figure against ours (agreeing
+/// when within [`AGREEMENT`]), then the effects of the device that the results themselves
+/// show. Empty when there is nothing to say.
+fn reading(s: &StudyDir) -> Vec<String> {
+    let r = &s.results;
+    let m = &s.meta;
+    let mut lines = Vec::new();
+    let first = m.published.first();
+    let first_run = first.and_then(|f| published_run(s, &f.matches));
+    for p in m.published.iter().skip(1) {
+        let first = first.expect("published is not empty here");
+        let run = published_run(s, &p.matches);
+        let talk = p.ms / first.ms;
+        let (time, instr) = match (run, first_run) {
+            (Some(a), Some(b)) => (
+                Some(a.median_ms / b.median_ms),
+                a.instructions
+                    .zip(b.instructions)
+                    .map(|(x, y)| x as f64 / y as f64),
+            ),
+            _ => (None, None),
+        };
+        let mut line = format!(
+            "{} against {}: the talk {talk:.2}×; ours by time {}",
+            p.label,
+            first.label,
+            verdict(time, talk)
+        );
+        if instr.is_some() {
+            let _ = write!(line, ", by JIT instructions {}", verdict(instr, talk));
+        }
+        line.push('.');
+        lines.push(line);
+    }
+
+    // lavapipe's draw-time rebuild: far more instructions outside the JIT code than the
+    // baseline of the same material.
+    let overhead = |run: &Run| Some(run.instructions_total?.saturating_sub(run.instructions?));
+    let baseline_of = |run: &Run| {
+        r.runs
+            .iter()
+            .filter(|b| b.variant.starts_with("model=ggx"))
+            .find(|b| b.material == run.material)
+            .or_else(|| r.runs.iter().find(|b| b.variant.starts_with("model=ggx")))
+    };
+    let mut rebuilt = Vec::new();
+    for run in r
+        .runs
+        .iter()
+        .filter(|run| !run.variant.starts_with("model=ggx"))
+    {
+        let (Some(o), Some(b)) = (overhead(run), baseline_of(run).and_then(overhead)) else {
+            continue;
+        };
+        if o as f64 > REBUILD_OVERHEAD * b as f64 {
+            rebuilt.push(format!(
+                "`{}` on {} ({} outside the JIT code, ggx {})",
+                short_variant(&run.variant),
+                run.material,
+                fmt_count(Some(o)),
+                fmt_count(Some(b))
+            ));
+        }
+    }
+    if !rebuilt.is_empty() {
+        let published_hit = m
+            .published
+            .iter()
+            .filter_map(|p| published_run(s, &p.matches))
+            .any(|run| {
+                overhead(run)
+                    .zip(baseline_of(run).and_then(overhead))
+                    .is_some_and(|(o, b)| o as f64 > REBUILD_OVERHEAD * b as f64)
+            });
+        lines.push(format!(
+            "lavapipe rebuilds the shader at every draw for {}: their times include the \
+             rebuild and their JIT counts are of a shader specialised to the material \
+             (profiling/README.md), so neither compares with runs that are not rebuilt{}.",
+            rebuilt.join("; "),
+            if published_hit {
+                "; a published figure's run is among them"
+            } else {
+                ""
+            }
+        ));
+    }
+
+    // fp16 on llvmpipe is emulated: each fp16=on run against its fp16=off twin.
+    if is_llvmpipe(r) {
+        let mut time = Vec::new();
+        let mut instr = Vec::new();
+        for on in r.runs.iter().filter(|run| run.variant.contains("fp16=on")) {
+            let twin = on.variant.replace("fp16=on", "fp16=off");
+            let Some(off) = r
+                .runs
+                .iter()
+                .find(|run| run.variant == twin && run.material == on.material)
+            else {
+                continue;
+            };
+            time.push(on.median_ms / off.median_ms);
+            if let (Some(a), Some(b)) = (on.instructions, off.instructions) {
+                instr.push(a as f64 / b as f64);
+            }
+        }
+        if !time.is_empty() {
+            let range = |v: &[f64]| {
+                let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                if (hi - lo).abs() < 0.005 {
+                    format!("{lo:.2}×")
+                } else {
+                    format!("{lo:.2}–{hi:.2}×")
+                }
+            };
+            let mut line = format!(
+                "fp16 is emulated by llvmpipe (32-bit arithmetic plus conversions): `fp16=on` \
+                 costs {} its `fp16=off` twin in time",
+                range(&time)
+            );
+            if !instr.is_empty() {
+                let _ = write!(line, ", {} in JIT instructions", range(&instr));
+            }
+            line += "; on a GPU with native half floats it saves registers and scratch instead.";
+            lines.push(line);
+        }
+    }
+    lines
+}
+
+/// A variant key for prose: model and max_layers, then only the axes off their defaults.
+fn short_variant(key: &str) -> String {
+    let defaults = VariantKey::default().to_string();
+    let defaults: Vec<&str> = defaults.split(',').skip(2).collect();
+    key.split(',')
+        .filter(|part| !defaults.contains(part))
+        .collect::<Vec<_>>()
+        .join(",")
 }
 
 fn fit_section(md: &mut String, s: &StudyDir) {
@@ -386,6 +560,114 @@ mod tests {
         assert!(linear_fit(&[(1.0, 2.0)]).is_none());
         let (_, _, r2) = linear_fit(&[(0.0, 0.0), (1.0, 1.0), (2.0, 0.0)]).unwrap();
         assert!(r2 < 0.5);
+    }
+
+    fn run(variant: &str, ms: f64, jit: u64, total: u64) -> Run {
+        Run {
+            variant: variant.into(),
+            material: "gold".into(),
+            frames: 3,
+            min_ms: ms,
+            median_ms: ms,
+            mean_ms: ms,
+            max_ms: ms,
+            stdev_ms: 0.0,
+            ratio_to_baseline: 1.0,
+            fragment_invocations: None,
+            pipeline_ms: 0.0,
+            spirv_bytes: 0,
+            instructions: Some(jit),
+            instructions_total: Some(total),
+            executable_stats: None,
+        }
+    }
+
+    fn published(label: &str, matches: &str, ms: f64) -> crate::profile::sweep::Published {
+        crate::profile::sweep::Published {
+            label: label.into(),
+            matches: matches.into(),
+            ms,
+            source: None,
+        }
+    }
+
+    #[test]
+    fn the_reading_names_agreement_rebuilds_and_fp16_emulation() {
+        let key = |k: &str| k.parse::<VariantKey>().unwrap().to_string();
+        let tm2 = key("model=tm2,max_layers=2");
+        let study = StudyDir {
+            dir: PathBuf::from("x"),
+            results: Results {
+                device: super::super::bench::DeviceInfo {
+                    name: "llvmpipe (LLVM 15.0.6, 256 bits)".into(),
+                    driver: "llvmpipe Mesa".into(),
+                    api_version: "1.3".into(),
+                    vendor_id: 0x10005,
+                },
+                git_rev: "0".into(),
+                command: "c".into(),
+                size: [8, 8],
+                lp_num_threads: Some("0".into()),
+                runs: vec![
+                    run(&key("model=ggx"), 1.0, 2_000_000, 8_000_000),
+                    // 34 M outside the JIT code against the baseline's 6 M: rebuilt.
+                    run(&tm2, 4.0, 3_000_000, 37_000_000),
+                    run(
+                        &key("model=tm2,max_layers=2,fp16=on"),
+                        6.0,
+                        3_600_000,
+                        43_000_000,
+                    ),
+                    run(&key("model=tm6,max_layers=2"), 20.0, 15_000_000, 21_000_000),
+                    run(&key("model=tm2,max_layers=4"), 4.4, 6_000_000, 12_000_000),
+                ],
+            },
+            meta: StudyMeta {
+                name: "n".into(),
+                title: "t".into(),
+                description: String::new(),
+                sweep_file: "s".into(),
+                axes: Vec::new(),
+                points: Vec::new(),
+                skipped: Vec::new(),
+                published: vec![
+                    published("2-flux", "model=tm2,max_layers=2,fp16=off", 1.0),
+                    published("6-flux", "model=tm6", 16.24),
+                    published("wide array", "model=tm2,max_layers=4", 1.05),
+                ],
+                fit: false,
+                counter_size: None,
+            },
+        };
+        let lines = reading(&study);
+        assert_eq!(lines.len(), 4, "{lines:#?}");
+        assert_eq!(
+            lines[0],
+            "6-flux against 2-flux: the talk 16.24×; ours by time 5.00×, 0.31× the talk's, \
+             by JIT instructions 5.00×, 0.31× the talk's."
+        );
+        assert_eq!(
+            lines[1],
+            "wide array against 2-flux: the talk 1.05×; ours by time 1.10×, agrees, \
+             by JIT instructions 2.00×, 1.90× the talk's."
+        );
+        assert!(
+            lines[2].contains("`model=tm2,max_layers=2` on gold (34.000 M"),
+            "{}",
+            lines[2]
+        );
+        assert!(
+            lines[2].contains("`model=tm2,max_layers=2,fp16=on` on gold"),
+            "{}",
+            lines[2]
+        );
+        assert!(!lines[2].contains("tm6"), "{}", lines[2]);
+        assert!(lines[2].contains("a published figure's run is among them"));
+        assert!(
+            lines[3].contains("costs 1.50× its `fp16=off` twin in time, 1.20× in JIT"),
+            "{}",
+            lines[3]
+        );
     }
 
     #[test]
