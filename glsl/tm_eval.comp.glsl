@@ -29,15 +29,15 @@ layout(push_constant) uniform Push {
 #include "lib/tm2.glsl"
 #include "lib/tm6.glsl"
 
-// Where tm_emit_lobe writes: the sample's lobe slots and how many are filled.
-uint lobe_base;
-uint lobe_count;
+// Where tm_emit_lobe writes: the sample's first lobe slot and how many are filled.
+uint eval_first_lobe;
+uint eval_lobes;
 
 void tm_emit_lobe(vec3 weight, float alpha, uint kind) {
-    if (lobe_count < TM_MAX_LOBES) {
-        results.values[lobe_base + lobe_count] = vec4(weight, alpha);
+    if (eval_lobes < TM_MAX_LOBES) {
+        results.values[eval_first_lobe + eval_lobes] = vec4(weight, alpha);
     }
-    lobe_count++;
+    eval_lobes++;
 }
 
 void main() {
@@ -46,8 +46,8 @@ void main() {
         return;
     }
     uint base = i * push.stride;
-    lobe_base = base + 2u;
-    lobe_count = 0u;
+    eval_first_lobe = base + 2u;
+    eval_lobes = 0u;
     vec3 reflectance;
     vec3 transmittance;
     float mu = samples.cos_theta[i];
