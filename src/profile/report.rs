@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::shader::variant::VariantKey;
 
 use super::bench::{Results, Run};
-use super::sweep::{key_matches, StudyMeta};
+use super::sweep::{key_matches, Published, StudyMeta};
 
 /// One study's directory, read back.
 pub struct StudyDir {
@@ -157,10 +157,53 @@ pub fn render(studies: &[StudyDir], out: &Path) -> String {
     md += "## Studies\n\n";
     md += &index;
     md += "\n";
+    summary_section(&mut md, studies);
     for s in studies {
         study_section(&mut md, s, out_dir);
     }
     md
+}
+
+/// Every published comparison of every study in one table, so the headline ratios read at a
+/// glance; each study's section has the details.
+fn summary_section(md: &mut String, studies: &[StudyDir]) {
+    let rows: Vec<(&StudyDir, Comparison)> = studies
+        .iter()
+        .flat_map(|s| comparisons(s).into_iter().skip(1).map(move |c| (s, c)))
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        md,
+        "## Summary: ours against the talk\n\n\
+         Ratios to each study's first published figure (agreeing: within {:.0} % of the \
+         talk's).\n",
+        AGREEMENT * 100.0
+    );
+    let _ = writeln!(
+        md,
+        "| study | figure | against | talk | ours, time | ours, JIT instructions |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    for (s, c) in rows {
+        let _ = writeln!(
+            md,
+            "| [{}](#{}) | {} | {} | {:.2}× | {} | {} |",
+            s.meta.title,
+            anchor(&s.meta.title),
+            c.figure.label,
+            c.reference.label,
+            c.talk,
+            verdict(c.time, c.talk),
+            if c.instructions.is_some() {
+                verdict(c.instructions, c.talk)
+            } else {
+                "–".into()
+            }
+        );
+    }
+    md.push('\n');
 }
 
 fn anchor(title: &str) -> String {
@@ -302,44 +345,73 @@ fn published_run<'a>(s: &'a StudyDir, pattern: &str) -> Option<&'a Run> {
         .find(|run| key_matches(&run.variant, pattern))
 }
 
+/// One published figure set against ours: ratios to the study's first published figure, the
+/// talk's and ours from the same run.
+struct Comparison<'a> {
+    figure: &'a Published,
+    /// The study's first published figure, which the ratios divide by.
+    reference: &'a Published,
+    run: Option<&'a Run>,
+    talk: f64,
+    time: Option<f64>,
+    instructions: Option<f64>,
+}
+
+/// Every published figure of the study with its ratios (the first one's are 1).
+fn comparisons(s: &StudyDir) -> Vec<Comparison<'_>> {
+    let Some(reference) = s.meta.published.first() else {
+        return Vec::new();
+    };
+    let reference_run = published_run(s, &reference.matches);
+    s.meta
+        .published
+        .iter()
+        .map(|figure| {
+            let run = published_run(s, &figure.matches);
+            let pair = run.zip(reference_run);
+            Comparison {
+                figure,
+                reference,
+                run,
+                talk: figure.ms / reference.ms,
+                time: pair.map(|(a, b)| a.median_ms / b.median_ms),
+                instructions: pair
+                    .and_then(|(a, b)| Some(a.instructions? as f64 / b.instructions? as f64)),
+            }
+        })
+        .collect()
+}
+
 fn published_section(md: &mut String, s: &StudyDir) {
-    let m = &s.meta;
-    let find = |pattern: &str| published_run(s, pattern);
-    let first = &m.published[0];
-    let first_run = find(&first.matches);
     let _ = writeln!(
         md,
         "Against the talk (ratios to **{}**, the first figure; ours from the same run):\n",
-        first.label
+        s.meta.published[0].label
     );
     let _ = writeln!(
         md,
         "| figure | talk ms | talk ratio | our run | ours, time ratio | ours, instructions ratio |"
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|");
-    for p in &m.published {
-        let run = find(&p.matches);
-        let time_ratio = run.zip(first_run).map(|(a, b)| a.median_ms / b.median_ms);
-        let instr_ratio = run
-            .zip(first_run)
-            .and_then(|(a, b)| Some(a.instructions? as f64 / b.instructions? as f64));
+    for c in comparisons(s) {
         let _ = writeln!(
             md,
             "| {}{} | {:.3} | {:.2}× | {} | {} | {} |",
-            p.label,
-            p.source
+            c.figure.label,
+            c.figure
+                .source
                 .as_deref()
                 .map(|s| format!(" ({s})"))
                 .unwrap_or_default(),
-            p.ms,
-            p.ms / first.ms,
-            if run.is_some() {
-                format!("`{}`", p.matches)
+            c.figure.ms,
+            c.talk,
+            if c.run.is_some() {
+                format!("`{}`", c.figure.matches)
             } else {
                 "not measured".into()
             },
-            fmt_ratio(time_ratio),
-            fmt_ratio(instr_ratio)
+            fmt_ratio(c.time),
+            fmt_ratio(c.instructions)
         );
     }
     md.push('\n');
@@ -370,29 +442,20 @@ fn reading(s: &StudyDir) -> Vec<String> {
     let r = &s.results;
     let m = &s.meta;
     let mut lines = Vec::new();
-    let first = m.published.first();
-    let first_run = first.and_then(|f| published_run(s, &f.matches));
-    for p in m.published.iter().skip(1) {
-        let first = first.expect("published is not empty here");
-        let run = published_run(s, &p.matches);
-        let talk = p.ms / first.ms;
-        let (time, instr) = match (run, first_run) {
-            (Some(a), Some(b)) => (
-                Some(a.median_ms / b.median_ms),
-                a.instructions
-                    .zip(b.instructions)
-                    .map(|(x, y)| x as f64 / y as f64),
-            ),
-            _ => (None, None),
-        };
+    for c in comparisons(s).iter().skip(1) {
         let mut line = format!(
-            "{} against {}: the talk {talk:.2}×; ours by time {}",
-            p.label,
-            first.label,
-            verdict(time, talk)
+            "{} against {}: the talk {:.2}×; ours by time {}",
+            c.figure.label,
+            c.reference.label,
+            c.talk,
+            verdict(c.time, c.talk)
         );
-        if instr.is_some() {
-            let _ = write!(line, ", by JIT instructions {}", verdict(instr, talk));
+        if c.instructions.is_some() {
+            let _ = write!(
+                line,
+                ", by JIT instructions {}",
+                verdict(c.instructions, c.talk)
+            );
         }
         line.push('.');
         lines.push(line);
@@ -668,6 +731,15 @@ mod tests {
             "{}",
             lines[3]
         );
+        let md = render(std::slice::from_ref(&study), Path::new("REPORT.md"));
+        assert!(
+            md.contains(
+                "| [t](#t) | 6-flux | 2-flux | 16.24× | 5.00×, 0.31× the talk's | \
+                 5.00×, 0.31× the talk's |"
+            ),
+            "{md}"
+        );
+        assert!(md.contains("- wide array against 2-flux"), "{md}");
     }
 
     #[test]
