@@ -17,7 +17,7 @@ use lamina::model::{tm2, tm6, Evaluation, LayerParams, NoTir};
 use lamina::output::{EvalReport, EvalSample};
 use lamina::profile::bench::{self, BenchConfig, Case};
 use lamina::profile::sweep::{self, CounterSetup};
-use lamina::profile::{counter, report};
+use lamina::profile::{counter, diff, report};
 use lamina::render::Renderer;
 use lamina::render::{eval::GpuEvaluator, furnace, sheet};
 use lamina::shader::Model;
@@ -66,6 +66,9 @@ enum Command {
     Sweep(SweepArgs),
     /// Write profiling/REPORT.md from sweep results, beside the talk's published figures.
     Report(ReportArgs),
+    /// Compare two sets of results (commits, drivers, devices): time as each run's ratio to its
+    /// ggx baseline, JIT instruction counts as they are.
+    Diff(DiffArgs),
     /// Build a precomputed table (or load it from the cache), print its statistics and error
     /// studies.
     Tables(TablesArgs),
@@ -145,6 +148,26 @@ struct ReportArgs {
     dirs: Vec<PathBuf>,
     #[arg(long, value_name = "FILE", default_value = "profiling/REPORT.md")]
     out: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct DiffArgs {
+    /// The older results: a results.json, a study's directory, or a `lamina sweep` output
+    /// directory (its studies pair by name).
+    old: PathBuf,
+    /// The newer results, in the same forms.
+    new: PathBuf,
+    /// Exit with an error when a run's JIT instruction count grew by more than PCT percent
+    /// (instruction counts are deterministic; timings are too noisy on lavapipe to gate on).
+    #[arg(long, value_name = "PCT", value_parser = parse_percent)]
+    fail_above: Option<f64>,
+}
+
+fn parse_percent(text: &str) -> std::result::Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+        _ => Err(format!("`{text}` is not a percentage ≥ 0")),
+    }
 }
 
 #[derive(clap::Args)]
@@ -1004,6 +1027,36 @@ fn spot_points(n: u32) -> Vec<(u32, u32)> {
         .collect()
 }
 
+fn run_diff(args: &DiffArgs) -> Result<()> {
+    let old = diff::load(&args.old)?;
+    let new = diff::load(&args.new)?;
+    let diffs = diff::diff(&old, &new, &args.old, &args.new)?;
+    print!("{}", diff::render(&diffs));
+    if let Some(pct) = args.fail_above {
+        let grown = diff::regressions(&diffs, pct);
+        if !grown.is_empty() {
+            let list: Vec<String> = grown
+                .iter()
+                .map(|c| {
+                    format!(
+                        "{} | {} ({} → {})",
+                        c.new.variant,
+                        c.new.material,
+                        c.old.instructions.unwrap_or_default(),
+                        c.new.instructions.unwrap_or_default()
+                    )
+                })
+                .collect();
+            anyhow::bail!(
+                "JIT instructions grew by more than {pct} % in {} run(s):\n  {}",
+                grown.len(),
+                list.join("\n  ")
+            );
+        }
+    }
+    Ok(())
+}
+
 fn run_report(args: &ReportArgs) -> Result<()> {
     let studies = report::collect(&args.dirs)?;
     let text = report::render(&studies, &args.out);
@@ -1131,6 +1184,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => run_bench(&cli, args),
         Command::Sweep(args) => run_sweep(&cli, args),
         Command::Report(args) => run_report(args),
+        Command::Diff(args) => run_diff(args),
         Command::Tables(args) => run_tables(&cli, args),
         Command::View(args) => view(&cli, args),
         Command::CountWorker(args) => count_worker(&cli, args),

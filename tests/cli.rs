@@ -246,3 +246,43 @@ fn bench_writes_consistent_json_and_csv() {
         assert!(row.starts_with(&format!("\"{}\"", run["variant"].as_str().unwrap())));
     }
 }
+
+#[test]
+fn diff_pairs_committed_results_and_gates_on_instruction_growth() {
+    let results =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("profiling/results/lavapipe/reproduce");
+    let results = results.to_str().unwrap();
+    let dir = common::scratch_dir("cli-diff");
+
+    // Against itself: every study pairs, every run is unchanged, the gate holds at 0 %.
+    let out = lamina(&["diff", results, results, "--fail-above", "0"], &dir);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", stderr(&out));
+    for study in ["== flux", "== growth", "== static-array-size", "== tir"] {
+        assert!(text.contains(study), "{study} missing:\n{text}");
+    }
+    assert!(!text.contains("only in"), "{text}");
+    assert!(text.contains("+0.0 %"), "{text}");
+
+    // One run's instruction count raised by 10 %: the gate fails at 5 % naming it, holds at 20 %.
+    let flux = format!("{results}/flux");
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{flux}/results.json")).unwrap())
+            .unwrap();
+    let run = &mut json["runs"][3];
+    let variant = run["variant"].as_str().unwrap().to_owned();
+    let count = run["instructions"].as_u64().unwrap();
+    run["instructions"] = serde_json::json!(count + count / 10);
+    std::fs::write(dir.join("grown.json"), json.to_string()).unwrap();
+    let out = lamina(&["diff", &flux, "grown.json", "--fail-above", "5"], &dir);
+    let message = stderr(&out);
+    assert!(!out.status.success(), "the gate held");
+    assert!(message.contains("grew by more than 5 %"), "{message}");
+    assert!(message.contains(&variant), "{message}");
+    let out = lamina(&["diff", &flux, "grown.json", "--fail-above", "20"], &dir);
+    assert!(out.status.success(), "{}", stderr(&out));
+
+    let out = lamina(&["diff", &flux, "missing-dir"], &dir);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("missing-dir: no such file or directory"));
+}

@@ -5,6 +5,7 @@ pub mod bench;
 pub mod callgrind;
 pub mod chart;
 pub mod counter;
+pub mod diff;
 pub mod report;
 pub mod stats;
 pub mod sweep;

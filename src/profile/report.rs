@@ -20,7 +20,7 @@ pub struct StudyDir {
     pub meta: StudyMeta,
 }
 
-fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
+pub(super) fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::Input {
         path: path.to_owned(),
         message: e.to_string(),
@@ -557,7 +557,7 @@ fn reading(s: &StudyDir) -> Vec<String> {
 }
 
 /// A variant key for prose: model and max_layers, then only the axes off their defaults.
-fn short_variant(key: &str) -> String {
+pub(super) fn short_variant(key: &str) -> String {
     let defaults = VariantKey::default().to_string();
     let defaults: Vec<&str> = defaults.split(',').skip(2).collect();
     key.split(',')
