@@ -173,6 +173,40 @@ fn gpu_matches_cpu_oracle_on_random_cases() {
     common::assert_validation_clean(&gpu);
 }
 
+/// The most lobes the 6-flux model emits: dielectric layers that all hold a medium, no
+/// substrate (6n − 2 for n layers). The GPU's output has room for every one of them.
+#[test]
+fn six_flux_emits_its_largest_lobe_count_on_the_gpu() {
+    let gpu = common::gpu();
+    let slab = |ior: f64| LayerParams {
+        ior: [ior; 3],
+        kappa: [0.0; 3],
+        roughness: 0.2,
+        depth: 0.5,
+        sigma_s: [0.8, 0.5, 0.3],
+        sigma_a: [0.05, 0.1, 0.2],
+        g: 0.3,
+    };
+    for n in [1usize, 3] {
+        let variant: VariantKey = format!("model=tm6,max_layers={n}").parse().unwrap();
+        let evaluator = GpuEvaluator::new(&gpu, variant).unwrap();
+        let stack: Vec<LayerParams> = (0..n).map(|i| slab(1.3 + 0.2 * i as f64)).collect();
+        let cosines = [0.2, 0.6, 1.0];
+        let on_gpu = evaluator.evaluate(&stack, &cosines).unwrap();
+        for (&mu, g) in cosines.iter().zip(&on_gpu) {
+            let cpu = tm6::evaluate(&stack, mu, &evaluator.table, &NoTir);
+            assert_eq!(cpu.lobes.len(), 6 * n - 2, "CPU lobe count at μ = {mu}");
+            assert_eq!(evaluator.max_lobes(), 6 * n - 2);
+            let err = compare(g, &cpu);
+            assert!(
+                err <= 1e-3,
+                "n = {n}, μ = {mu}: {err:.2e}\nGPU {g:?}\nCPU {cpu:?}"
+            );
+        }
+    }
+    common::assert_validation_clean(&gpu);
+}
+
 #[test]
 fn fp16_error_is_reported_and_results_are_finite() {
     let gpu = common::gpu();

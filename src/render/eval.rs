@@ -92,7 +92,7 @@ impl<'g> GpuEvaluator<'g> {
     pub fn max_lobes(&self) -> usize {
         let n = self.variant.max_layers as usize;
         match self.variant.model {
-            Model::Tm6 => 3 * (2 * n - 1),
+            Model::Tm6 => 6 * n - 2,
             _ => n,
         }
     }

@@ -18,9 +18,11 @@ const float IOR_AIR = 1.0;
 #define LOBE_MIRROR 0u
 #define LOBE_RETRO 1u
 
-// Largest lobe count of a variant: one per layer (2-flux), three per component (6-flux:
-// interface, medium, …, substrate). src/render/eval.rs sizes its output by it.
-const uint TM_MAX_LOBES = MODEL == MODEL_TM6 ? 3u * (2u * MAX_LAYERS - 1u) : MAX_LAYERS;
+// Largest lobe count of a variant: one per layer (2-flux); in 6-flux, the first interface
+// emits its primary lobe alone and each later component (medium, interface, …) up to three,
+// most when every layer is a dielectric with a medium: 1 + 3·(2n − 1) = 6n − 2.
+// src/render/eval.rs sizes its output by it.
+const uint TM_MAX_LOBES = MODEL == MODEL_TM6 ? 6u * MAX_LAYERS - 2u : MAX_LAYERS;
 
 // Each model hands every lobe it finds, top to bottom, to this function, which the including
 // shader defines (the forward pass shades it, tm_eval stores it): the lobes are not collected
