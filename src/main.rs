@@ -157,8 +157,9 @@ struct DiffArgs {
     old: PathBuf,
     /// The newer results, in the same forms.
     new: PathBuf,
-    /// Exit with an error when a run's JIT instruction count grew by more than PCT percent
-    /// (instruction counts are deterministic; timings are too noisy on lavapipe to gate on).
+    /// Exit with an error when a run's JIT instruction count grew by more than PCT percent, or
+    /// when a run or study of OLD cannot be checked in NEW (instruction counts are
+    /// deterministic; timings are too noisy on lavapipe to gate on).
     #[arg(long, value_name = "PCT", value_parser = parse_percent)]
     fail_above: Option<f64>,
 }
@@ -1030,27 +1031,16 @@ fn spot_points(n: u32) -> Vec<(u32, u32)> {
 fn run_diff(args: &DiffArgs) -> Result<()> {
     let old = diff::load(&args.old)?;
     let new = diff::load(&args.new)?;
-    let diffs = diff::diff(&old, &new, &args.old, &args.new)?;
-    print!("{}", diff::render(&diffs));
+    let cmp = diff::diff(&old, &new, &args.old, &args.new)?;
+    print!("{}", diff::render(&cmp));
     if let Some(pct) = args.fail_above {
-        let grown = diff::regressions(&diffs, pct);
-        if !grown.is_empty() {
-            let list: Vec<String> = grown
-                .iter()
-                .map(|c| {
-                    format!(
-                        "{} | {} ({} → {})",
-                        c.new.variant,
-                        c.new.material,
-                        c.old.instructions.unwrap_or_default(),
-                        c.new.instructions.unwrap_or_default()
-                    )
-                })
-                .collect();
+        let problems = diff::gate(&cmp, pct);
+        if !problems.is_empty() {
             anyhow::bail!(
-                "JIT instructions grew by more than {pct} % in {} run(s):\n  {}",
-                grown.len(),
-                list.join("\n  ")
+                "--fail-above {pct}: {} problem(s) — JIT instructions grew by more than {pct} %, \
+                 or the new results cannot be checked:\n  {}",
+                problems.len(),
+                problems.join("\n  ")
             );
         }
     }

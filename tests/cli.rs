@@ -278,6 +278,7 @@ fn diff_pairs_committed_results_and_gates_on_instruction_growth() {
     let message = stderr(&out);
     assert!(!out.status.success(), "the gate held");
     assert!(message.contains("grew by more than 5 %"), "{message}");
+    assert!(message.contains("1 problem(s)"), "{message}");
     assert!(message.contains(&variant), "{message}");
     let out = lamina(&["diff", &flux, "grown.json", "--fail-above", "20"], &dir);
     assert!(out.status.success(), "{}", stderr(&out));
@@ -285,4 +286,25 @@ fn diff_pairs_committed_results_and_gates_on_instruction_growth() {
     let out = lamina(&["diff", &flux, "missing-dir"], &dir);
     assert!(!out.status.success());
     assert!(stderr(&out).contains("missing-dir: no such file or directory"));
+}
+
+#[test]
+fn report_refuses_a_study_whose_files_disagree() {
+    let flux =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("profiling/results/lavapipe/reproduce/flux");
+    let dir = common::scratch_dir("cli-report-mismatch");
+    let study = dir.join("flux");
+    std::fs::create_dir_all(&study).unwrap();
+    std::fs::copy(flux.join("study.json"), study.join("study.json")).unwrap();
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(flux.join("results.json")).unwrap()).unwrap();
+    json["runs"].as_array_mut().unwrap().truncate(1);
+    std::fs::write(study.join("results.json"), json.to_string()).unwrap();
+    let out = lamina(&["report", "flux", "--out", "REPORT.md"], &dir);
+    let message = stderr(&out);
+    assert!(!out.status.success());
+    assert!(message.contains("flux/study.json"), "{message}");
+    assert!(message.contains("not from the same sweep"), "{message}");
+    assert!(!message.contains("panicked"), "{message}");
+    assert!(!dir.join("REPORT.md").exists());
 }

@@ -2,8 +2,8 @@
 //! devices. Runs pair by (variant, material). Times are compared as ratios to each run's own
 //! `ggx` baseline (milliseconds of different machines or runs do not compare; the ratio within
 //! one run does), JIT instruction counts as they are (deterministic: any change is a change of
-//! the code that ran). `--fail-above PCT` turns an instruction-count growth into an error, for
-//! CI.
+//! the code that ran). `--fail-above PCT` turns an instruction-count growth — or a run or study
+//! it cannot check — into an error, for CI.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -81,14 +81,17 @@ pub struct Change<'a> {
 }
 
 impl Change<'_> {
-    /// New ratio to the baseline over the old one.
-    pub fn time(&self) -> f64 {
-        self.new.ratio_to_baseline / self.old.ratio_to_baseline
+    /// New ratio to the baseline over the old one; `None` when the old one is not positive.
+    pub fn time(&self) -> Option<f64> {
+        (self.old.ratio_to_baseline > 0.0)
+            .then(|| self.new.ratio_to_baseline / self.old.ratio_to_baseline)
     }
 
-    /// New JIT instruction count over the old one, when both were counted.
+    /// New JIT instruction count over the old one, when both were counted and the old one is
+    /// not zero.
     pub fn instructions(&self) -> Option<f64> {
-        Some(self.new.instructions? as f64 / self.old.instructions? as f64)
+        let old = self.old.instructions.filter(|&n| n > 0)?;
+        Some(self.new.instructions? as f64 / old as f64)
     }
 }
 
@@ -131,6 +134,13 @@ fn pair_runs<'a>(old: &'a ResultSet, new: &'a ResultSet) -> SetDiff<'a> {
     }
 }
 
+/// Two collections of result sets compared: the pairs, and the sets on one side only.
+pub struct Comparison<'a> {
+    pub pairs: Vec<SetDiff<'a>>,
+    pub only_old: Vec<&'a ResultSet>,
+    pub only_new: Vec<&'a ResultSet>,
+}
+
 /// Pairs the sets by name; two single sets pair whatever their names. Errors when nothing
 /// pairs.
 pub fn diff<'a>(
@@ -138,9 +148,13 @@ pub fn diff<'a>(
     new: &'a [ResultSet],
     old_path: &Path,
     new_path: &Path,
-) -> Result<Vec<SetDiff<'a>>> {
+) -> Result<Comparison<'a>> {
     if let ([o], [n]) = (old, new) {
-        return Ok(vec![pair_runs(o, n)]);
+        return Ok(Comparison {
+            pairs: vec![pair_runs(o, n)],
+            only_old: Vec::new(),
+            only_new: Vec::new(),
+        });
     }
     let pairs: Vec<SetDiff> = old
         .iter()
@@ -167,19 +181,37 @@ pub fn diff<'a>(
             ),
         });
     }
-    Ok(pairs)
+    Ok(Comparison {
+        pairs,
+        only_old: old
+            .iter()
+            .filter(|o| !new.iter().any(|n| n.name == o.name))
+            .collect(),
+        only_new: new
+            .iter()
+            .filter(|n| !old.iter().any(|o| o.name == n.name))
+            .collect(),
+    })
 }
 
 fn percent(x: f64) -> String {
     format!("{:+.1} %", (x - 1.0) * 100.0)
 }
 
-/// The comparison as text tables, one per pair of sets.
-pub fn render(diffs: &[SetDiff]) -> String {
+fn ratio(x: Option<f64>) -> String {
+    x.map_or("–".into(), percent)
+}
+
+/// The comparison as text tables, one per pair of sets, then the sets on one side only.
+pub fn render(cmp: &Comparison) -> String {
     let mut out = String::new();
-    for d in diffs {
+    for d in &cmp.pairs {
         let (o, n) = (&d.old.results, &d.new.results);
-        let _ = writeln!(out, "== {}", d.new.name);
+        if d.old.name == d.new.name {
+            let _ = writeln!(out, "== {}", d.new.name);
+        } else {
+            let _ = writeln!(out, "== {} → {}", d.old.name, d.new.name);
+        }
         let _ = writeln!(
             out,
             "old: {} (rev {}, {}x{})\nnew: {} (rev {}, {}x{})",
@@ -204,10 +236,10 @@ pub fn render(diffs: &[SetDiff]) -> String {
                 "{:>8.2} {:>8.2} {:>9}  {:>14} {:>14} {:>9}  {} | {}",
                 c.old.ratio_to_baseline,
                 c.new.ratio_to_baseline,
-                percent(c.time()),
+                ratio(c.time()),
                 count(c.old),
                 count(c.new),
-                c.instructions().map_or("–".into(), percent),
+                ratio(c.instructions()),
                 short_variant(&c.new.variant),
                 c.new.material
             );
@@ -224,16 +256,48 @@ pub fn render(diffs: &[SetDiff]) -> String {
         }
         out.push('\n');
     }
+    for (side, sets) in [("old", &cmp.only_old), ("new", &cmp.only_new)] {
+        for set in sets.iter() {
+            let _ = writeln!(
+                out,
+                "only in {side}: study {} ({})",
+                set.name,
+                set.path.display()
+            );
+        }
+    }
     out
 }
 
-/// The paired runs whose JIT instruction count grew by more than `percent` %.
-pub fn regressions<'a>(diffs: &'a [SetDiff], percent: f64) -> Vec<&'a Change<'a>> {
-    diffs
-        .iter()
-        .flat_map(|d| d.changes.iter())
-        .filter(|c| c.instructions().is_some_and(|x| x > 1.0 + percent / 100.0))
-        .collect()
+/// What fails a `--fail-above percent` gate: every paired run whose JIT instruction count grew
+/// by more than `percent` %, and whatever the gate cannot check — a run counted before and not
+/// now, a run or a study of the old results missing from the new.
+pub fn gate(cmp: &Comparison, percent: f64) -> Vec<String> {
+    let mut problems = Vec::new();
+    for d in &cmp.pairs {
+        for c in &d.changes {
+            let name = format!("{} | {}", c.new.variant, c.new.material);
+            match (c.old.instructions, c.new.instructions) {
+                (Some(a), Some(b)) if b as f64 > a as f64 * (1.0 + percent / 100.0) => {
+                    problems.push(format!("{name}: {a} → {b} JIT instructions"));
+                }
+                (Some(_), None) => problems.push(format!("{name}: counted before, not now")),
+                _ => {}
+            }
+        }
+        for r in &d.only_old {
+            problems.push(format!(
+                "{} | {}: missing from {}",
+                r.variant,
+                r.material,
+                d.new.path.display()
+            ));
+        }
+    }
+    for set in &cmp.only_old {
+        problems.push(format!("study {}: missing from the new results", set.name));
+    }
+    problems
 }
 
 #[cfg(test)]
@@ -301,15 +365,15 @@ mod tests {
                 run(tm2, "silver", 4.0, None),
             ],
         )];
-        let diffs = diff(&old, &new, Path::new("a"), Path::new("b")).unwrap();
-        assert_eq!(diffs.len(), 1);
-        let d = &diffs[0];
+        let cmp = diff(&old, &new, Path::new("a"), Path::new("b")).unwrap();
+        assert_eq!(cmp.pairs.len(), 1);
+        let d = &cmp.pairs[0];
         assert_eq!(d.changes.len(), 2);
-        assert!((d.changes[0].time() - 0.5).abs() < 1e-12);
+        assert!((d.changes[0].time().unwrap() - 0.5).abs() < 1e-12);
         assert!((d.changes[0].instructions().unwrap() - 0.5).abs() < 1e-12);
         assert_eq!(d.only_old.len(), 1);
         assert_eq!(d.only_new.len(), 1);
-        let text = render(&diffs);
+        let text = render(&cmp);
         assert!(text.contains("-50.0 %"), "{text}");
         assert!(text.contains("+5.0 %"), "{text}");
         assert!(
@@ -320,18 +384,49 @@ mod tests {
             text.contains("only in new: model=tm2,max_layers=2 | silver"),
             "{text}"
         );
-        // tm2 on gold grew by 5 %: a regression above 2 %, not above 10 %.
-        assert_eq!(regressions(&diffs, 2.0).len(), 1);
-        assert!(regressions(&diffs, 10.0).is_empty());
+        // tm2 on gold grew by 5 %: a failure at 2 %, not at 10 %; tm2 on copper is missing
+        // from the new results at any threshold.
+        let at_2 = gate(&cmp, 2.0);
+        assert_eq!(at_2.len(), 2, "{at_2:?}");
+        assert!(at_2[0].contains("3000000 → 3150000"), "{at_2:?}");
+        let at_10 = gate(&cmp, 10.0);
+        assert_eq!(at_10.len(), 1, "{at_10:?}");
+        assert!(at_10[0].contains("copper: missing from flux"), "{at_10:?}");
+    }
+
+    #[test]
+    fn lost_counts_and_zero_baselines_are_not_passed_silently() {
+        let tm2 = "model=tm2,max_layers=4,fp16=off,tir=none,fgd=karis,g2=height-correlated,ndf=ggx";
+        let old = [set("a", vec![run(tm2, "gold", 0.0, Some(0))])];
+        let new = [set("b", vec![run(tm2, "gold", 4.0, None)])];
+        let cmp = diff(&old, &new, Path::new("a"), Path::new("b")).unwrap();
+        let c = &cmp.pairs[0].changes[0];
+        assert!(c.time().is_none() && c.instructions().is_none());
+        let text = render(&cmp);
+        assert!(text.contains("== a → b"), "{text}");
+        assert!(!text.contains("NaN") && !text.contains("inf"), "{text}");
+        let problems = gate(&cmp, 0.0);
+        assert_eq!(problems.len(), 1, "{problems:?}");
+        assert!(
+            problems[0].contains("counted before, not now"),
+            "{problems:?}"
+        );
     }
 
     #[test]
     fn sets_pair_by_name_and_nothing_in_common_is_an_error() {
         let old = [set("fp16", vec![]), set("tir", vec![])];
         let new = [set("tir", vec![]), set("growth", vec![])];
-        let diffs = diff(&old, &new, Path::new("a"), Path::new("b")).unwrap();
-        assert_eq!(diffs.len(), 1);
-        assert_eq!(diffs[0].new.name, "tir");
+        let cmp = diff(&old, &new, Path::new("a"), Path::new("b")).unwrap();
+        assert_eq!(cmp.pairs.len(), 1);
+        assert_eq!(cmp.pairs[0].new.name, "tir");
+        let text = render(&cmp);
+        assert!(text.contains("only in old: study fp16"), "{text}");
+        assert!(text.contains("only in new: study growth"), "{text}");
+        assert_eq!(
+            gate(&cmp, 0.0),
+            vec!["study fp16: missing from the new results"]
+        );
         let new = [set("growth", vec![]), set("g2", vec![])];
         let err = diff(&old, &new, Path::new("a"), Path::new("b"))
             .err()

@@ -61,11 +61,20 @@ pub fn collect(roots: &[PathBuf]) -> Result<Vec<StudyDir>> {
     }
     dirs.into_iter()
         .map(|dir| {
-            Ok(StudyDir {
-                results: read_json(&dir.join("results.json"))?,
-                meta: read_json(&dir.join("study.json"))?,
-                dir,
-            })
+            let results: Results = read_json(&dir.join("results.json"))?;
+            let meta: StudyMeta = read_json(&dir.join("study.json"))?;
+            if let Some(p) = meta.points.iter().find(|p| p.run >= results.runs.len()) {
+                return Err(Error::Input {
+                    path: dir.join("study.json"),
+                    message: format!(
+                        "`points` names run {} but results.json has {} run(s): the two files \
+                         are not from the same sweep",
+                        p.run,
+                        results.runs.len()
+                    ),
+                });
+            }
+            Ok(StudyDir { dir, results, meta })
         })
         .collect()
 }
@@ -461,45 +470,40 @@ fn reading(s: &StudyDir) -> Vec<String> {
         lines.push(line);
     }
 
-    // lavapipe's draw-time rebuild: far more instructions outside the JIT code than the
-    // baseline of the same material.
+    // lavapipe's draw-time rebuild: far more instructions outside the JIT code than the ggx
+    // baseline of the same material (no verdict without that baseline).
     let overhead = |run: &Run| Some(run.instructions_total?.saturating_sub(run.instructions?));
-    let baseline_of = |run: &Run| {
-        r.runs
+    let rebuild = |run: &Run| -> Option<(u64, u64)> {
+        if run.variant.starts_with("model=ggx") {
+            return None;
+        }
+        let base = r
+            .runs
             .iter()
-            .filter(|b| b.variant.starts_with("model=ggx"))
-            .find(|b| b.material == run.material)
-            .or_else(|| r.runs.iter().find(|b| b.variant.starts_with("model=ggx")))
+            .find(|b| b.variant.starts_with("model=ggx") && b.material == run.material)?;
+        let (o, b) = (overhead(run)?, overhead(base)?);
+        (b > 0 && o as f64 > REBUILD_OVERHEAD * b as f64).then_some((o, b))
     };
-    let mut rebuilt = Vec::new();
-    for run in r
+    let rebuilt: Vec<String> = r
         .runs
         .iter()
-        .filter(|run| !run.variant.starts_with("model=ggx"))
-    {
-        let (Some(o), Some(b)) = (overhead(run), baseline_of(run).and_then(overhead)) else {
-            continue;
-        };
-        if o as f64 > REBUILD_OVERHEAD * b as f64 {
-            rebuilt.push(format!(
+        .filter_map(|run| {
+            let (o, b) = rebuild(run)?;
+            Some(format!(
                 "`{}` on {} ({} outside the JIT code, ggx {})",
                 short_variant(&run.variant),
                 run.material,
                 fmt_count(Some(o)),
                 fmt_count(Some(b))
-            ));
-        }
-    }
+            ))
+        })
+        .collect();
     if !rebuilt.is_empty() {
         let published_hit = m
             .published
             .iter()
             .filter_map(|p| published_run(s, &p.matches))
-            .any(|run| {
-                overhead(run)
-                    .zip(baseline_of(run).and_then(overhead))
-                    .is_some_and(|(o, b)| o as f64 > REBUILD_OVERHEAD * b as f64)
-            });
+            .any(|run| rebuild(run).is_some());
         lines.push(format!(
             "lavapipe rebuilds the shader at every draw for {}: their times include the \
              rebuild and their JIT counts are of a shader specialised to the material \
@@ -543,13 +547,13 @@ fn reading(s: &StudyDir) -> Vec<String> {
             };
             let mut line = format!(
                 "fp16 is emulated by llvmpipe (32-bit arithmetic plus conversions): `fp16=on` \
-                 costs {} its `fp16=off` twin in time",
+                 runs at {} its `fp16=off` twin's time",
                 range(&time)
             );
             if !instr.is_empty() {
                 let _ = write!(line, ", {} in JIT instructions", range(&instr));
             }
-            line += "; on a GPU with native half floats it saves registers and scratch instead.";
+            line += "; a GPU with native half floats saves registers and scratch with it instead.";
             lines.push(line);
         }
     }
@@ -727,7 +731,7 @@ mod tests {
         assert!(!lines[2].contains("tm6"), "{}", lines[2]);
         assert!(lines[2].contains("a published figure's run is among them"));
         assert!(
-            lines[3].contains("costs 1.50× its `fp16=off` twin in time, 1.20× in JIT"),
+            lines[3].contains("runs at 1.50× its `fp16=off` twin's time, 1.20× in JIT"),
             "{}",
             lines[3]
         );
