@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use crate::error::{Error, Result};
 
 use super::bench::{Results, Run};
-use super::report::{read_json, short_variant};
+use super::report::{dirs_holding, read_json, short_variant};
 
 /// One results.json with the name it pairs by (its directory's, for a study).
 pub struct ResultSet {
@@ -51,25 +51,8 @@ pub fn load(path: &Path) -> Result<Vec<ResultSet>> {
                 .into(),
         });
     }
-    if path.join("results.json").is_file() {
-        return Ok(vec![named(path.join("results.json"), dir_name(path))?]);
-    }
-    let entries = std::fs::read_dir(path).map_err(|e| Error::Input {
-        path: path.to_owned(),
-        message: e.to_string(),
-    })?;
-    let mut dirs: Vec<PathBuf> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.join("results.json").is_file())
-        .collect();
-    if dirs.is_empty() {
-        return Err(Error::Input {
-            path: path.to_owned(),
-            message: "no results.json here or in its sub-directories".into(),
-        });
-    }
-    dirs.sort();
-    dirs.into_iter()
+    dirs_holding(path, "results.json")?
+        .into_iter()
         .map(|d| named(d.join("results.json"), dir_name(&d)))
         .collect()
 }

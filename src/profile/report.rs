@@ -31,33 +31,38 @@ pub(super) fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T
     })
 }
 
+/// `root` itself when it holds `file`, else its sub-directories that hold one, in name order;
+/// an error naming `root` when there is none.
+pub(super) fn dirs_holding(root: &Path, file: &str) -> Result<Vec<PathBuf>> {
+    if root.join(file).is_file() {
+        return Ok(vec![root.to_owned()]);
+    }
+    let entries = std::fs::read_dir(root).map_err(|e| Error::Input {
+        path: root.to_owned(),
+        message: format!("not a results directory: {e}"),
+    })?;
+    let mut found: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.join(file).is_file())
+        .collect();
+    if found.is_empty() {
+        return Err(Error::Input {
+            path: root.to_owned(),
+            message: format!(
+                "no {file} here or in its sub-directories; run `lamina sweep FILE --out DIR` first"
+            ),
+        });
+    }
+    found.sort();
+    Ok(found)
+}
+
 /// The study directories under `roots`: a root holding `study.json` is one; otherwise its
 /// sub-directories that hold one, in name order.
 pub fn collect(roots: &[PathBuf]) -> Result<Vec<StudyDir>> {
     let mut dirs = Vec::new();
     for root in roots {
-        if root.join("study.json").is_file() {
-            dirs.push(root.clone());
-            continue;
-        }
-        let entries = std::fs::read_dir(root).map_err(|e| Error::Input {
-            path: root.clone(),
-            message: format!("not a results directory: {e}"),
-        })?;
-        let mut found: Vec<PathBuf> = entries
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.join("study.json").is_file())
-            .collect();
-        if found.is_empty() {
-            return Err(Error::Input {
-                path: root.clone(),
-                message: "no study.json here or in its sub-directories; \
-                          run `lamina sweep FILE --out DIR` first"
-                    .into(),
-            });
-        }
-        found.sort();
-        dirs.extend(found);
+        dirs.extend(dirs_holding(root, "study.json")?);
     }
     dirs.into_iter()
         .map(|dir| {
