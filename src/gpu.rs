@@ -6,8 +6,8 @@ use std::sync::Arc;
 use crate::error::Result;
 use crate::shader::ShaderCompiler;
 use crate::vk::{
-    BindingKind, DescriptorSetLayout, Device, DeviceSelector, InstanceDesc, Pipeline,
-    PipelineLayout, SpecConstants, Stages,
+    BindingKind, DescriptorSet, DescriptorSetLayout, Device, DeviceSelector, InstanceDesc,
+    Pipeline, PipelineLayout, Recorder, SpecConstants, Stages,
 };
 
 pub struct Gpu {
@@ -72,5 +72,20 @@ impl ComputeKernel {
             layout,
             pipeline,
         })
+    }
+
+    /// Records one dispatch of the kernel: binds it with `set` and `push`, then dispatches
+    /// `groups` workgroups.
+    pub fn record_dispatch<P: bytemuck::Pod>(
+        &self,
+        rec: &mut Recorder,
+        set: &DescriptorSet,
+        push: &P,
+        groups: [u32; 3],
+    ) {
+        rec.bind_pipeline(&self.pipeline);
+        rec.bind_set(&self.pipeline, &self.layout, 0, set);
+        rec.push_constants(&self.layout, push);
+        rec.dispatch(groups[0], groups[1], groups[2]);
     }
 }

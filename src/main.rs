@@ -933,7 +933,7 @@ fn run_tables(cli: &Cli, args: &TablesArgs) -> Result<()> {
     println!(
         "tir: {0}x{0}x{0} (μ, α, η), {samples} samples per texel, {1} ({2:.2} s) on {3}; cache: {where_}",
         args.size,
-        if cached { "loaded from the cache" } else { "built" },
+        provenance(cached),
         started.elapsed().as_secs_f64(),
         gpu.device.report.name
     );
@@ -1018,6 +1018,15 @@ fn run_tables(cli: &Cli, args: &TablesArgs) -> Result<()> {
         println!("wrote {}", path.display());
     }
     check_validation(&gpu)
+}
+
+/// How a table came to be, for the `tables` commands' first line.
+fn provenance(cached: bool) -> &'static str {
+    if cached {
+        "loaded from the cache"
+    } else {
+        "built"
+    }
 }
 
 /// 16 texel indices spread over an n×n grid, corners included.

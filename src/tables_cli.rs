@@ -16,7 +16,7 @@ use lamina::tables::fgd_study::{self, Class, Errors};
 use lamina::tables::split_sum::{self, SplitSumTable};
 use lamina::Gpu;
 
-use super::{check_validation, progress_bar, spot_points, TableKind, TablesArgs};
+use super::{check_validation, progress_bar, provenance, spot_points, TableKind, TablesArgs};
 
 /// The G2 form the tables are built with here: the renderer's default.
 const G2_FORM: G2 = G2::HeightCorrelated;
@@ -82,11 +82,7 @@ fn load_grid(gpu: &Gpu, kind: GridKind, args: &TablesArgs, samples: u32) -> Resu
         grid.eta.1,
         grid.kappa.0,
         grid.kappa.1,
-        if cached {
-            "loaded from the cache"
-        } else {
-            "built"
-        },
+        provenance(cached),
         started.elapsed().as_secs_f64(),
         gpu.device.report.name
     );
@@ -309,11 +305,7 @@ fn belcour(gpu: &Gpu, args: &TablesArgs, samples: u32) -> Result<()> {
         "fgd-belcour: {0}x{0} (L0…L3 at μ, √α), {samples} samples per texel, G2 {G2_FORM}, \
          {1} ({2:.2} s) on {3}",
         args.size,
-        if cached {
-            "loaded from the cache"
-        } else {
-            "built"
-        },
+        provenance(cached),
         started.elapsed().as_secs_f64(),
         gpu.device.report.name
     );

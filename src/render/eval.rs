@@ -143,16 +143,15 @@ impl<'g> GpuEvaluator<'g> {
             .write(6, Resource::Sampled(&self.fgd.plane_view, &self.sampler));
         let count = cosines.len() as u32;
         submit_and_wait(device, "eval", |rec| {
-            rec.bind_pipeline(&self.kernel.pipeline);
-            rec.bind_set(&self.kernel.pipeline, &self.kernel.layout, 0, &set);
-            rec.push_constants(
-                &self.kernel.layout,
+            self.kernel.record_dispatch(
+                rec,
+                &set,
                 &Push {
                     sample_count: count,
                     stride: stride as u32,
                 },
+                [count.div_ceil(LOCAL_SIZE), 1, 1],
             );
-            rec.dispatch(count.div_ceil(LOCAL_SIZE), 1, 1);
             rec.barrier(Access::ComputeWrite, Access::HostRead);
             Ok(())
         })?;

@@ -161,10 +161,12 @@ impl Environment {
                 ImageState::Undefined,
                 ImageState::ComputeWrite,
             );
-            rec.bind_pipeline(&convert.pipeline);
-            rec.bind_set(&convert.pipeline, &convert.layout, 0, &convert_set);
-            rec.push_constants(&convert.layout, &ConvertPush { face_size: size });
-            rec.dispatch(super::groups(size), super::groups(size), 6);
+            convert.record_dispatch(
+                rec,
+                &convert_set,
+                &ConvertPush { face_size: size },
+                [super::groups(size), super::groups(size), 6],
+            );
             rec.transition(
                 &source,
                 0..1,

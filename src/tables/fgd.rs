@@ -219,10 +219,9 @@ pub fn build_grid(
         let depth = SLICES_PER_SUBMIT.min(slices - l0);
         submit_and_wait(device, "fgd grid", |rec| {
             rec.begin_label("fgd grid");
-            rec.bind_pipeline(&kernel.pipeline);
-            rec.bind_set(&kernel.pipeline, &kernel.layout, 0, &set);
-            rec.push_constants(
-                &kernel.layout,
+            kernel.record_dispatch(
+                rec,
+                &set,
                 &GridPush {
                     dims,
                     range: [eta.0 as f32, eta.1 as f32, kappa.0 as f32, kappa.1 as f32],
@@ -230,8 +229,8 @@ pub fn build_grid(
                     l0,
                     pad: [0; 2],
                 },
+                [dims[2].div_ceil(64), dims[0], dims[1] * depth],
             );
-            rec.dispatch(dims[2].div_ceil(64), dims[0], dims[1] * depth);
             rec.barrier(Access::ComputeWrite, Access::HostRead);
             rec.end_label();
             Ok(())
@@ -400,17 +399,16 @@ impl BelcourTable {
         set.write(0, Resource::Buffer(&out))
             .write(1, Resource::Buffer(&basis_buffer));
         submit_and_wait(device, "belcour table", |rec| {
-            rec.bind_pipeline(&kernel.pipeline);
-            rec.bind_set(&kernel.pipeline, &kernel.layout, 0, &set);
-            rec.push_constants(
-                &kernel.layout,
+            kernel.record_dispatch(
+                rec,
+                &set,
                 &BelcourPush {
                     size,
                     sample_count: samples,
                     basis_points: super::belcour::POINTS as u32,
                 },
+                [super::groups(size), super::groups(size), 1],
             );
-            rec.dispatch(super::groups(size), super::groups(size), 1);
             rec.barrier(Access::ComputeWrite, Access::HostRead);
             Ok(())
         })?;
@@ -674,10 +672,12 @@ impl<'g> FgdProbe<'g> {
             .write(4, Resource::Buffer(&output));
         let count = points.len() as u32;
         submit_and_wait(device, "fgd probe", |rec| {
-            rec.bind_pipeline(&self.kernel.pipeline);
-            rec.bind_set(&self.kernel.pipeline, &self.kernel.layout, 0, &set);
-            rec.push_constants(&self.kernel.layout, &ProbePush { count });
-            rec.dispatch(count.div_ceil(64), 1, 1);
+            self.kernel.record_dispatch(
+                rec,
+                &set,
+                &ProbePush { count },
+                [count.div_ceil(64), 1, 1],
+            );
             rec.barrier(Access::ComputeWrite, Access::HostRead);
             Ok(())
         })?;

@@ -86,16 +86,15 @@ impl SplitSumTable {
         set.write(0, Resource::Buffer(&buffer));
         submit_and_wait(device, "split-sum table", |rec| {
             rec.begin_label("split-sum table");
-            rec.bind_pipeline(&kernel.pipeline);
-            rec.bind_set(&kernel.pipeline, &kernel.layout, 0, &set);
-            rec.push_constants(
-                &kernel.layout,
+            kernel.record_dispatch(
+                rec,
+                &set,
                 &Push {
                     size,
                     sample_count: samples,
                 },
+                [super::groups(size), super::groups(size), 1],
             );
-            rec.dispatch(super::groups(size), super::groups(size), 1);
             rec.barrier(Access::ComputeWrite, Access::HostRead);
             rec.end_label();
             Ok(())

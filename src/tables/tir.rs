@@ -109,17 +109,16 @@ impl TirTable {
             let depth = SLICES_PER_SUBMIT.min(size - z0);
             submit_and_wait(device, "tir table", |rec| {
                 rec.begin_label("tir table");
-                rec.bind_pipeline(&kernel.pipeline);
-                rec.bind_set(&kernel.pipeline, &kernel.layout, 0, &set);
-                rec.push_constants(
-                    &kernel.layout,
+                kernel.record_dispatch(
+                    rec,
+                    &set,
                     &Push {
                         size,
                         sample_count: samples,
                         z0,
                     },
+                    [super::groups(size), super::groups(size), depth],
                 );
-                rec.dispatch(super::groups(size), super::groups(size), depth);
                 rec.barrier(Access::ComputeWrite, Access::HostRead);
                 rec.end_label();
                 Ok(())
