@@ -1,6 +1,7 @@
 //! Physical-device choice, the logical device, its queue and the memory allocator.
 //!
-//! lamina needs Vulkan 1.3 (dynamic rendering, synchronization2), host query reset and pipeline
+//! lamina needs Vulkan 1.3 (dynamic rendering, synchronization2, maintenance4 — SPIR-V 1.6
+//! compute shaders declare their workgroup size with `LocalSizeId`), host query reset and pipeline
 //! statistics queries; `shaderFloat16` and `VK_KHR_pipeline_executable_properties` are enabled
 //! when present and reported otherwise. One queue family with graphics + compute does all work.
 
@@ -53,6 +54,8 @@ pub struct DeviceReport {
     pub pipeline_executable_properties: bool,
     pub dynamic_rendering: bool,
     pub synchronization2: bool,
+    /// Core in Vulkan 1.3 and required there; glslang's SPIR-V 1.6 output uses `LocalSizeId`.
+    pub maintenance4: bool,
     pub host_query_reset: bool,
     pub max_image_dimension_3d: u32,
     pub max_image_dimension_cube: u32,
@@ -125,6 +128,7 @@ fn report(instance: &ash::Instance, index: usize, pd: vk::PhysicalDevice) -> Dev
         pipeline_executable_properties: exec_props,
         dynamic_rendering: f13.dynamic_rendering == vk::TRUE,
         synchronization2: f13.synchronization2 == vk::TRUE,
+        maintenance4: f13.maintenance4 == vk::TRUE,
         host_query_reset: f12.host_query_reset == vk::TRUE,
         max_image_dimension_3d: props.limits.max_image_dimension3_d,
         max_image_dimension_cube: props.limits.max_image_dimension_cube,
@@ -186,6 +190,7 @@ impl Device {
         let usable = |r: &DeviceReport| {
             r.dynamic_rendering
                 && r.synchronization2
+                && r.maintenance4
                 && r.host_query_reset
                 && universal_queue_family(&instance.raw, pds[r.index]).is_some()
         };
@@ -213,8 +218,8 @@ impl Device {
         };
         if !usable(&chosen) {
             return Err(VkError::Unsupported(format!(
-                "device `{}` lacks Vulkan 1.3 dynamic rendering, synchronization2, host query \
-                 reset or a graphics+compute queue",
+                "device `{}` lacks Vulkan 1.3 dynamic rendering, synchronization2, maintenance4, \
+                 host query reset or a graphics+compute queue",
                 chosen.name
             )));
         }
@@ -248,7 +253,8 @@ impl Device {
             .shader_float16(chosen.shader_float16);
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
             .dynamic_rendering(true)
-            .synchronization2(true);
+            .synchronization2(true)
+            .maintenance4(true);
         let mut exec = vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default()
             .pipeline_executable_info(true);
         let mut info = vk::DeviceCreateInfo::default()
