@@ -50,10 +50,7 @@ impl Range {
     }
 }
 
-const IOR: Range = Range {
-    open_low: true,
-    ..Range::closed(0.0, 400.0, "(0, 400]")
-};
+const IOR: Range = Range::closed(1e-3, 400.0, "[0.001, 400]");
 const KAPPA: Range = Range::closed(0.0, 200.0, "[0, 200]");
 const UNIT: Range = Range::closed(0.0, 1.0, "[0, 1]");
 const F0: Range = Range::closed(0.0, 0.99, "[0, 0.99]");

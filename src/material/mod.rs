@@ -21,12 +21,12 @@
 //!
 //! | field | range | why |
 //! |---|---|---|
-//! | `ior` | (0, 400] | η ≤ 0 is unphysical and conductors go below 1 (gold's red η is 0.14). Measured RGB values stay below 5, but the artist form reaches η ≈ 398 (f0 = 0.99, edge tint 0), and the physical form must load whatever [`Stack::to_toml`] writes |
+//! | `ior` | [0.001, 400] | η ≤ 0 is unphysical and conductors go below 1 (gold's red η is 0.14; the artist form reaches 0.005 at f0 = 0.99, edge tint 1). Below 10⁻³ a relative IOR's reciprocal and square leave the GPU's f32 range in the TIR and lobe-refraction terms. Measured RGB values stay below 5, but the artist form reaches η ≈ 398 (f0 = 0.99, edge tint 0), and the physical form must load whatever [`Stack::to_toml`] writes |
 //! | `kappa` | [0, 200] | likewise: measured κ stays below 10 (aluminium 9.2), the artist form reaches κ ≈ 199; the bound keeps κ⁴ in the GPU's f32 conductor Fresnel far from overflow |
 //! | `roughness` | [0, 1] | GGX α; 0 is a mirror, and the FGD/TIR tables span α ∈ [0, 1] |
 //! | `f0` | [0, 0.99] | as r → 1 Gulbrandsen's η and κ go to infinity; the most reflective RGB metal, silver, has F0 ≈ 0.975 |
 //! | `edge_tint` | [0, 1] | a reflectance-like colour; every value gives (η, κ) inside the rows above |
-//! | `depth` | [0, 100] | only τ = depth·σ matters and τ ≳ 45 is opaque (tm6 clamps there); larger values are unit slips |
+//! | `depth` | [0, 100] | only τ = depth·σ matters, and τ = 10⁵ is opaque to f64 already; larger values are unit slips |
 //! | `sigma_s`, `sigma_a` | [0, 1000] | the same reasoning; coefficients, so non-negative |
 //! | `g` | (−1, 1) | HG asymmetry; ±1 is the degenerate limit (a delta, not a phase function) |
 //!

@@ -65,7 +65,7 @@ fn non_finite_value() {
     let m = error(&coat_over_gold("tm2", "").replace("[1.5, 1.5, 1.5]", "[1.5, nan, 1.5]"));
     assert_names(
         &m,
-        &["layer 1", "`ior`", "G: NaN is not finite", "(0, 400]"],
+        &["layer 1", "`ior`", "G: NaN is not finite", "[0.001, 400]"],
     );
     let m = error(&coat_over_gold("tm6", "depth = inf"));
     assert_names(&m, &["layer 1", "`depth`", "not finite", "[0, 100]"]);
@@ -80,7 +80,7 @@ fn out_of_range_value() {
             "`roughness`",
             "[0, 1]",
         ),
-        ("[1.5, 1.5, 1.5]", "[1.5, 0, 1.5]", "`ior`", "(0, 400]"),
+        ("[1.5, 1.5, 1.5]", "[1.5, 0, 1.5]", "`ior`", "[0.001, 400]"),
         (
             "roughness = 0.1",
             "roughness = 0.1\ng = 1.0\ndepth = 1",

@@ -11,10 +11,13 @@
 //! (no dispersion), a conductor's (η, κ) is per channel; relative IORs are η_{i+1}/η_i and
 //! κ_{i+1}/η_i; roughness is GGX α.
 
+pub(crate) mod adding;
 pub mod fgd;
 pub mod fresnel;
 pub mod hg;
 pub mod microfacet;
+#[cfg(test)]
+mod properties;
 pub mod tir;
 pub mod tm2;
 pub mod tm6;

@@ -1,61 +1,11 @@
 //! The 2-flux transfer-matrix model (Randrianandrasana, Callet & Lucas 2021) as the reference
-//! code defines it (ALGORITHMS.md §4): per-interface energy and asymmetry matrices composed top
-//! to bottom, one lobe per layer. The f64 twin of `glsl/include/lib/tm2.glsl`.
+//! code defines it (ALGORITHMS.md §4): per-interface energy and asymmetry factors composed top
+//! to bottom — by the adding equations, which equal the reference's transfer-matrix products
+//! where those exist and stay finite where they do not (`adding.rs`) — one lobe per layer. The
+//! f64 twin of `glsl/include/lib/tm2.glsl`.
 
+use super::adding::{avg, map3, Component, Slab};
 use super::{hg, Evaluation, Fgd, LayerParams, Lobe, Tir, IOR_AIR};
-
-/// A 2×2 transfer matrix per RGB channel, mapping the fluxes below a component to those above.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Matrix2 {
-    pub m11: [f64; 3],
-    pub m12: [f64; 3],
-    pub m21: [f64; 3],
-    pub m22: [f64; 3],
-}
-
-pub(crate) fn map3(f: impl Fn(usize) -> f64) -> [f64; 3] {
-    [f(0), f(1), f(2)]
-}
-
-pub(crate) fn avg(v: [f64; 3]) -> f64 {
-    (v[0] + v[1] + v[2]) / 3.0
-}
-
-impl Matrix2 {
-    pub fn identity() -> Self {
-        Self {
-            m11: [1.0; 3],
-            m12: [0.0; 3],
-            m21: [0.0; 3],
-            m22: [1.0; 3],
-        }
-    }
-
-    /// From the scattering relations a↑ = r a↓ + t' b↑, b↓ = t a↓ + r' b↑ (§4.2):
-    /// M = (1/t) [1, −r'; r, t t' − r r'].
-    pub fn interface(r: [f64; 3], t: [f64; 3], rp: [f64; 3], tp: [f64; 3]) -> Self {
-        Self {
-            m11: map3(|c| 1.0 / t[c]),
-            m12: map3(|c| -rp[c] / t[c]),
-            m21: map3(|c| r[c] / t[c]),
-            m22: map3(|c| (t[c] * tp[c] - r[c] * rp[c]) / t[c]),
-        }
-    }
-
-    pub fn mul(&self, b: &Self) -> Self {
-        Self {
-            m11: map3(|c| self.m11[c] * b.m11[c] + self.m12[c] * b.m21[c]),
-            m12: map3(|c| self.m11[c] * b.m12[c] + self.m12[c] * b.m22[c]),
-            m21: map3(|c| self.m21[c] * b.m11[c] + self.m22[c] * b.m21[c]),
-            m22: map3(|c| self.m21[c] * b.m12[c] + self.m22[c] * b.m22[c]),
-        }
-    }
-
-    /// Reflectance over a substrate of reflectance `r_c` (the paper's Eq. 24).
-    pub fn terminate(&self, r_c: [f64; 3]) -> [f64; 3] {
-        map3(|c| (self.m21[c] + self.m22[c] * r_c[c]) / (self.m11[c] + self.m12[c] * r_c[c]))
-    }
-}
 
 /// |cos| of the mean direction refracted from `cos_i` through relative IOR η; 0 when the mean
 /// direction itself is totally reflected.
@@ -105,10 +55,11 @@ fn relative_eta(layer: &LayerParams, eta_above: f64) -> Option<f64> {
     (!layer.is_conductor()).then(|| avg(layer.ior) / eta_above)
 }
 
-/// Evaluates the 2-flux model for view cosine `cos_theta` (§4.6).
+/// Evaluates the 2-flux model for view cosine `cos_theta` (§4.6), composing the components by
+/// the adding equations (`adding.rs`).
 pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn Tir) -> Evaluation {
-    let mut e = Matrix2::identity();
-    let mut g = Matrix2::identity();
+    let mut e = Slab::empty();
+    let mut g = Slab::empty();
     let (mut r_prev, mut g_prev) = ([0.0; 3], 0.0);
     let mut g_t0i = 1.0;
     let mut eta_above = IOR_AIR;
@@ -127,10 +78,9 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
                     )
                 });
                 let g_r = hg::g_of_alpha(layer.roughness);
-                transmittance = [0.0; 3];
                 (
-                    e.terminate(r_c),
-                    avg(g.terminate([avg(r_c) * g_r; 3])),
+                    e.over_base(r_c),
+                    avg(g.over_base([avg(r_c) * g_r; 3])),
                     g_t0i,
                 )
             }
@@ -161,23 +111,19 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
                     rp += tau;
                     tp -= tau;
                 }
-                e = e.mul(&Matrix2::interface([r; 3], [t; 3], [rp; 3], [tp; 3]));
-                g = g.mul(&Matrix2::interface(
-                    [r * f.g_r; 3],
-                    [t * g_t; 3],
-                    [rp * f.g_r; 3],
-                    [tp * g_tp; 3],
+                e = e.over(&Component::lossless(r, t, rp, tp));
+                g = g.over(&Component::weighted(
+                    r * f.g_r,
+                    t * g_t,
+                    rp * f.g_r,
+                    tp * g_tp,
                 ));
-                transmittance = map3(|c| 1.0 / e.m11[c]);
                 cos_i = f.mu_t;
                 eta_above = avg(layer.ior);
-                (
-                    map3(|c| e.m21[c] / e.m11[c]),
-                    avg(map3(|c| g.m21[c] / g.m11[c])),
-                    g_t0j,
-                )
+                (e.r, avg(g.r), g_t0j)
             }
         };
+        transmittance = if layer.is_conductor() { [0.0; 3] } else { e.t };
         let weight = map3(|c| r_total[c] - r_prev[c]);
         let energy = avg(weight);
         let lobe_g = if energy > 0.0 {

@@ -1,98 +1,21 @@
 //! The 6-flux transfer-matrix model (Randrianandrasana, Callet & Lucas 2021) as the reference
 //! code defines it (ALGORITHMS.md §5): fluxes (1,2) primary down/up, (3,4) secondary forward
 //! class, (5,6) secondary backward class; components alternate interface, medium, …,
-//! substrate. The f64 twin of `glsl/include/lib/tm6.glsl`: dense 6×6 matrices per channel, and
-//! the three reflectances extracted by solving the downward boundary conditions (the same
-//! algebra as the reference's 20-entry sparse products).
+//! substrate. The f64 twin of `glsl/include/lib/tm6.glsl`. Components are composed by the
+//! adding equations with 3×3 operators between the flux classes (`adding.rs`), which equal the
+//! reference's 6×6 matrix products and 3×3 extraction where those exist and stay finite where
+//! they do not (thick media, opaque components).
+//!
+//! One departure from the reference, where it returned wrong values rather than failing: its
+//! medium clamped the optical depth τ to 45/max(σ_ext) (and 45/max(γ)) to keep sinh, cosh and
+//! 1/T finite. The same τ also drives the scattered flux, which decays at γ ≪ σ_ext in a
+//! scattering medium, so a medium of optical depth 10⁴ transmitted like one of 45/σ_ext·γ
+//! (T = 0.003 through four layers of σ_s = 222, depth 49). The two-stream factors are written
+//! here in forms that only decay (e^{−γτ}, e^{−2γτ}), so no clamp is needed.
 
-use super::tm2::{self, avg, map3, Matrix2};
+use super::adding::{avg, map3, Component, Component6, Rgb, Slab6};
+use super::tm2;
 use super::{hg, Evaluation, Fgd, LayerParams, Lobe, Tir, IOR_AIR};
-
-type Rgb = [f64; 3];
-
-#[derive(Clone, Copy)]
-struct Matrix6([[Rgb; 6]; 6]);
-
-impl Matrix6 {
-    fn identity() -> Self {
-        let mut m = [[[0.0; 3]; 6]; 6];
-        for (i, row) in m.iter_mut().enumerate() {
-            row[i] = [1.0; 3];
-        }
-        Self(m)
-    }
-
-    fn mul(&self, b: &Self) -> Self {
-        let mut c = [[[0.0; 3]; 6]; 6];
-        for (i, row) in c.iter_mut().enumerate() {
-            for (j, out) in row.iter_mut().enumerate() {
-                *out = map3(|ch| (0..6).map(|k| self.0[i][k][ch] * b.0[k][j][ch]).sum());
-            }
-        }
-        Self(c)
-    }
-
-    /// Block-diagonal interface: the primary block from `p`, both secondary blocks from `s`.
-    fn interface(p: Matrix2, s: Matrix2) -> Self {
-        let mut a = Self::identity();
-        let mut block = |o: usize, m: Matrix2| {
-            a.0[o][o] = m.m11;
-            a.0[o][o + 1] = m.m12;
-            a.0[o + 1][o] = m.m21;
-            a.0[o + 1][o + 1] = m.m22;
-        };
-        block(0, p);
-        block(2, s);
-        block(4, s);
-        a
-    }
-
-    /// Homogeneous medium from T, r_fb, t_ff (§5.4); the backward pair mirrors the forward pair.
-    fn medium(t: Rgb, r_fb: Rgb, t_ff: Rgb) -> Self {
-        let mut a = Self::identity();
-        let m = &mut a.0;
-        m[0][0] = map3(|c| 1.0 / t[c]);
-        m[1][1] = t;
-        m[2][2] = map3(|c| 1.0 / t_ff[c]);
-        m[3][3] = map3(|c| t_ff[c] - r_fb[c] * r_fb[c] / t_ff[c]);
-        m[2][5] = map3(|c| -r_fb[c] / t_ff[c]);
-        m[4][1] = m[2][5];
-        m[3][4] = map3(|c| r_fb[c] / t_ff[c]);
-        m[5][0] = m[3][4];
-        m[2][0] = map3(|c| m[2][2][c] - m[0][0][c]);
-        m[3][1] = map3(|c| m[3][3][c] - t[c]);
-        m[4][4] = m[2][2];
-        m[5][5] = m[3][3];
-        m[4][3] = m[2][5];
-        m[5][2] = m[3][4];
-        a
-    }
-
-    /// Upward fluxes (r, r_f, r_b) above the stack and downward fluxes (b1, b3, b5) below it,
-    /// for a bottom that reflects every class with `r_c`, from a1 = 1, a3 = a5 = 0 (§5.6).
-    fn extract(&self, r_c: Rgb) -> ([Rgb; 3], [Rgb; 3]) {
-        let mut up = [[0.0; 3]; 3];
-        let mut down = [[0.0; 3]; 3];
-        for ch in 0..3 {
-            let m = |i: usize, j: usize| self.0[i][j][ch];
-            let col = |row: usize, k: usize| m(row, 2 * k) + m(row, 2 * k + 1) * r_c[ch];
-            let c: [[f64; 3]; 3] = std::array::from_fn(|r| std::array::from_fn(|k| col(2 * r, k)));
-            let det = c[0][0] * (c[1][1] * c[2][2] - c[1][2] * c[2][1])
-                - c[0][1] * (c[1][0] * c[2][2] - c[1][2] * c[2][0])
-                + c[0][2] * (c[1][0] * c[2][1] - c[1][1] * c[2][0]);
-            let b = [
-                (c[1][1] * c[2][2] - c[1][2] * c[2][1]) / det,
-                -(c[1][0] * c[2][2] - c[1][2] * c[2][0]) / det,
-                (c[1][0] * c[2][1] - c[1][1] * c[2][0]) / det,
-            ];
-            for k in 0..3 {
-                down[k][ch] = b[k];
-                up[k][ch] = (0..3).map(|j| col(2 * k + 1, j) * b[j]).sum();
-            }
-        }
-        (up, down)
-    }
-}
 
 fn safe_ratio(num: f64, den: f64) -> f64 {
     if den.abs() > 1e-7 {
@@ -100,6 +23,11 @@ fn safe_ratio(num: f64, den: f64) -> f64 {
     } else {
         0.0
     }
+}
+
+/// 1 − e^{−x} for x ≥ 0, without cancellation at small x.
+fn one_minus_exp_neg(x: f64) -> f64 {
+    -(-x).exp_m1()
 }
 
 /// A medium's two-stream factors (§5.3, numerics §5.8).
@@ -111,56 +39,55 @@ struct Medium {
     g_tff: f64,
 }
 
+/// Back-reflection and forward transmission of the two-stream system (a, b) over optical
+/// depth τ: with S = sinh(γτ), C = cosh(γτ), r = S·b/(Cγ + S·a) and t = γ/(Cγ + S·a), here
+/// divided through by e^{γτ}/2 so that nothing grows with τ.
+fn two_stream(a: f64, b: f64, tau: f64) -> (f64, f64) {
+    let gamma = (a * a - b * b).max(0.0).sqrt();
+    let x = gamma * tau;
+    let (decay, spread) = ((-x).exp(), one_minus_exp_neg(2.0 * x));
+    let den = gamma * (2.0 - spread) + a * spread;
+    (b * spread / den, 2.0 * gamma * decay / den)
+}
+
 fn medium_factors(layer: &LayerParams, mu: f64) -> Medium {
     let sigma_k = map3(|c| layer.sigma_a[c].max(1e-7));
     let sigma_sb = map3(|c| layer.sigma_s[c] * hg::lh_norm(layer.g));
     let sigma_sf = map3(|c| layer.sigma_s[c] - sigma_sb[c]);
     let sigma_ext = map3(|c| layer.sigma_s[c] + sigma_k[c]);
-    let a = map3(|c| sigma_ext[c] - sigma_sf[c]);
-    let b = sigma_sb;
-    let gamma = map3(|c| (a[c] * a[c] - b[c] * b[c]).max(0.0).sqrt());
-    let a_g = map3(|c| sigma_ext[c] - sigma_sf[c] * layer.g);
-    let b_g = map3(|c| -sigma_sb[c] * layer.g);
-    let gamma_g = map3(|c| (a_g[c] * a_g[c] - b_g[c] * b_g[c]).max(0.0).sqrt());
-    let max3 = |v: Rgb| v[0].max(v[1]).max(v[2]);
-    let fastest = max3(gamma).max(max3(gamma_g));
-    let tau = (layer.depth / mu.max(1e-7))
-        .min(45.0 / fastest.max(1e-7))
-        .min(45.0 / max3(sigma_ext).max(1e-7));
-    let x = map3(|c| {
-        let s = (gamma[c] * tau).sinh();
-        1.0 / ((1.0 + s * s).sqrt() * gamma[c] + s * a[c])
-    });
-    let x_g = map3(|c| {
-        let s = (gamma_g[c] * tau).sinh();
-        1.0 / ((1.0 + s * s).sqrt() * gamma_g[c] + s * a_g[c])
-    });
-    let r_fb = map3(|c| (gamma[c] * tau).sinh() * b[c] * x[c]);
-    let t_ff = map3(|c| gamma[c] * x[c]);
+    let tau = layer.depth / mu.max(1e-7);
+    let (mut r_fb, mut t_ff) = ([0.0; 3], [0.0; 3]);
+    let (mut rg, mut tg) = ([0.0; 3], [0.0; 3]);
+    for c in 0..3 {
+        (r_fb[c], t_ff[c]) = two_stream(sigma_ext[c] - sigma_sf[c], sigma_sb[c], tau);
+        (rg[c], tg[c]) = two_stream(
+            sigma_ext[c] - sigma_sf[c] * layer.g,
+            -sigma_sb[c] * layer.g,
+            tau,
+        );
+    }
     Medium {
         t: map3(|c| (-sigma_ext[c] * tau).exp()),
         r_fb,
         t_ff,
-        g_rfb: avg(map3(|c| {
-            safe_ratio((gamma_g[c] * tau).sinh() * b_g[c] * x_g[c], r_fb[c])
-        })),
-        g_tff: avg(map3(|c| safe_ratio(gamma_g[c] * x_g[c], t_ff[c]))),
+        g_rfb: avg(map3(|c| safe_ratio(rg[c], r_fb[c]))),
+        g_tff: avg(map3(|c| safe_ratio(tg[c], t_ff[c]))),
     }
 }
 
-/// What a component contributes: an interface's or a medium's matrices (energy, asymmetry),
+/// What a component contributes: an interface's or a medium's operators (energy, asymmetry),
 /// a substrate, or nothing (an index-matched interface, an empty medium).
 enum Step {
-    Interface(Matrix6, Matrix6),
-    Medium(Matrix6, Matrix6),
+    Interface(Component6, Component6),
+    Medium(Component6, Component6),
     Substrate { r_c: Rgb, g_r: f64 },
     Nothing,
 }
 
 /// Evaluates the 6-flux model for view cosine `cos_theta` (§5.5–5.7).
 pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn Tir) -> Evaluation {
-    let mut e = Matrix6::identity();
-    let mut g = Matrix6::identity();
+    let mut e = Slab6::empty();
+    let mut g = Slab6::empty();
     let mut prev = [[0.0; 3]; 3];
     let mut prev_g = [[0.0; 3]; 3];
     let (mut g_t0i, mut g_st0i) = (1.0, 1.0);
@@ -224,13 +151,13 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
                     rsp += tau;
                     tsp -= tau;
                 }
-                let m2 = |r: f64, t: f64, rp: f64, tp: f64| {
-                    Matrix2::interface([r; 3], [t; 3], [rp; 3], [tp; 3])
-                };
-                let energy = Matrix6::interface(m2(r, t, rp, tp), m2(rs, ts, rsp, tsp));
-                let asym = Matrix6::interface(
-                    m2(r * f.g_r, t * gt, rp * f.g_r, tp * gtp),
-                    m2(rs * f.g_r, ts * gst, rsp * f.g_r, tsp * gstp),
+                let energy = Component6::interface(
+                    Component::lossless(r, t, rp, tp),
+                    Component::lossless(rs, ts, rsp, tsp),
+                );
+                let asym = Component6::interface(
+                    Component::weighted(r * f.g_r, t * gt, rp * f.g_r, tp * gtp),
+                    Component::weighted(rs * f.g_r, ts * gst, rsp * f.g_r, tsp * gstp),
                 );
                 steps.push(Step::Interface(energy, asym));
                 g_t0i = g_t0j;
@@ -243,8 +170,8 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
                 let gr = map3(|c| m.r_fb[c] * m.g_rfb);
                 let gt = map3(|c| m.t_ff[c] * m.g_tff);
                 steps.push(Step::Medium(
-                    Matrix6::medium(m.t, m.r_fb, m.t_ff),
-                    Matrix6::medium(m.t, gr, gt),
+                    Component6::medium(m.t, m.r_fb, m.t_ff),
+                    Component6::medium(m.t, gr, gt),
                 ));
             } else {
                 steps.push(Step::Nothing);
@@ -255,7 +182,7 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
                 Step::Substrate { r_c, g_r } => {
                     primary = true;
                     transmittance = [0.0; 3];
-                    (e.extract(r_c).0, g.extract(map3(|c| r_c[c] * g_r)).0)
+                    (e.over_base(r_c), g.over_base(map3(|c| r_c[c] * g_r)))
                 }
                 Step::Interface(energy, asym) | Step::Medium(energy, asym) => {
                     // Request flags (§5.7): primary after the first interface, backward after
@@ -265,16 +192,14 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
                     } else {
                         backward = true;
                     }
-                    e = e.mul(&energy);
-                    g = g.mul(&asym);
-                    let (up, down) = e.extract([0.0; 3]);
-                    transmittance = map3(|c| down[0][c] + down[1][c] + down[2][c]);
-                    (up, g.extract([0.0; 3]).0)
+                    e = e.over(&energy);
+                    g = g.over(&asym);
+                    transmittance = map3(|c| e.down[0][c] + e.down[1][c] + e.down[2][c]);
+                    (e.up, g.up)
                 }
                 Step::Nothing => {
-                    let (up, down) = e.extract([0.0; 3]);
-                    transmittance = map3(|c| down[0][c] + down[1][c] + down[2][c]);
-                    (up, g.extract([0.0; 3]).0)
+                    transmittance = map3(|c| e.down[0][c] + e.down[1][c] + e.down[2][c]);
+                    (e.up, g.up)
                 }
             };
             // Primary, secondary-forward, secondary-backward lobes, as the flags allow (§5.7).

@@ -12,12 +12,18 @@
 #define real4 f16vec4
 // Smallest cosine used as a divisor: the smallest normal half float.
 #define REAL_MIN_COS real(6.2e-5)
+// Smallest denominator the adding equations divide by: the smallest normal half float
+// (src/model/adding.rs: it only turns 0/0 into 0).
+#define REAL_GAP_FLOOR 6.103515625e-5
 #else
 #define real float
 #define real2 vec2
 #define real3 vec3
 #define real4 vec4
 #define REAL_MIN_COS 1e-20
+// Smallest denominator the adding equations divide by: the smallest normal float
+// (src/model/adding.rs: it only turns 0/0 into 0).
+#define REAL_GAP_FLOOR 1.17549435e-38
 #endif
 
 #endif

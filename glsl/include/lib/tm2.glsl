@@ -1,6 +1,7 @@
 // The 2-flux transfer-matrix model (Randrianandrasana, Callet & Lucas 2021), as the reference
-// implementation defines it (ALGORITHMS.md §4): per-interface energy and asymmetry matrices
-// composed top to bottom, one reflected lobe per layer. Mirrors src/model/tm2.rs.
+// implementation defines it (ALGORITHMS.md §4): per-interface energy and asymmetry factors
+// composed top to bottom by the adding equations (tm_common.glsl), one reflected lobe per layer.
+// Mirrors src/model/tm2.rs.
 //
 // The per-layer state lives in arrays sized by the MAX_LAYERS specialization constant (the
 // "static layer-array size" of the real-time study); loops run over the material's real layer
@@ -85,29 +86,29 @@ void tm2_factors(MaterialGpu material, float mu, inout Tm2Factors comps[MAX_LAYE
     }
 }
 
-// Pass 2: compose the matrices top to bottom and emit one lobe per layer through tm_emit_lobe
-// (§4.2–4.6). Returns the lobe count (= layers); `reflectance` and `transmittance` get the
-// stack totals.
+// Pass 2: compose the components top to bottom by the adding equations and emit one lobe per
+// layer through tm_emit_lobe (§4.2–4.6). Returns the lobe count (= layers); `reflectance` and
+// `transmittance` get the stack totals.
 uint tm2_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3 transmittance) {
     Tm2Factors comps[MAX_LAYERS];
     uint count;
     tm2_factors(material, mu, comps, count);
 
-    TmMatrix e = tm_identity();
-    TmMatrix g = tm_identity();
+    TmSlab e = tm_slab_empty();
+    TmSlab1 g = tm_slab1_empty();
     real3 r_prev = real3(0.0);
     real g_prev = real(0.0);
     float g_t0i = 1.0;
     reflectance = vec3(0.0);
-    transmittance = vec3(0.0);
+    transmittance = vec3(1.0);
     for (uint i = 0u; i < count; ++i) {
         Tm2Factors c = comps[i];
         real3 r_total;
         real g_total;
         float g_t0j = g_t0i;
         if (c.conductor) {
-            r_total = tm_terminate(e, c.r);
-            g_total = tm_avg(tm_terminate(g, real3(tm_avg(c.r) * real(c.gr))));
+            r_total = tm_over_base(e, c.r);
+            g_total = tm_over_base1(g, tm_avg(c.r) * real(c.gr));
         } else if (c.skip) {
             r_total = r_prev;
             g_total = g_prev;
@@ -129,13 +130,13 @@ uint tm2_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3
                 c.rp += tau;
                 c.tp -= tau;
             }
-            e = tm_mul(e, tm_interface(c.r, c.t, c.rp, c.tp));
-            g = tm_mul(g, tm_interface(c.r * real(c.gr), c.t * real(c.gt),
-                                       c.rp * real(c.grp), c.tp * real(c.gtp)));
-            r_total = e.m21 / e.m11;
-            g_total = tm_avg(g.m21 / g.m11);
-            transmittance = vec3(real3(1.0) / e.m11);
+            e = tm_over(e, c.r, c.t, c.rp, c.tp);
+            g = tm_over1(g, c.r.x * real(c.gr), c.t.x * real(c.gt), c.rp.x * real(c.grp),
+                         c.tp.x * real(c.gtp));
+            r_total = e.r;
+            g_total = g.r;
         }
+        transmittance = c.conductor ? vec3(0.0) : vec3(e.t);
         real3 weight = r_total - r_prev;
         real energy = tm_avg(weight);
         float lobe_g = energy > real(0.0) ? min(float((g_total - g_prev) / energy), 1.0) : 0.0;
@@ -143,9 +144,6 @@ uint tm2_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3
         r_prev = r_total;
         g_prev = g_total;
         g_t0i = g_t0j;
-        if (c.conductor) {
-            transmittance = vec3(0.0);
-        }
     }
     reflectance = vec3(r_prev);
     return count;

@@ -7,134 +7,231 @@
 // shader's tm_emit_lobe as soon as it is known: no per-component or per-lobe array. Function-local
 // arrays indexed by the loop counter are what made this shader slow to compile on llvmpipe (its
 // indirect accesses become branch ladders as long as the array, about 5 s of LLVM per layer of
-// `max_layers`) — profiling/README.md. The energy and asymmetry matrices are dense 6×6 per RGB
-// channel; the right-hand factors are multiplied in their sparse forms (an interface is
-// block-diagonal, a medium has 14 non-zero entries), the terms of the dense product that are not
-// products by zero, in the same order. The reflectances come from solving the three downward
-// boundary conditions instead of the reference's 20-entry sparse products: the same algebra.
+// `max_layers`) — profiling/README.md. Components are added below the stack by the adding
+// equations with 3×3 operators between the flux classes (the reference's 6×6 transfer-matrix
+// products and 3×3 extraction give the same values wherever they exist; src/model/adding.rs
+// says where they do not). An interface is block-diagonal and a medium has seven non-zero
+// operator entries, so each has its own composition function.
 #ifndef LAMINA_LIB_TM6
 #define LAMINA_LIB_TM6
 
 #include "tm_common.glsl"
 
-struct Tm6Matrix {
-    real3 m[6][6];
+// The stack composed so far, per channel, as scattering between the three flux classes
+// (0 primary, 1 secondary forward, 2 secondary backward; src/model/adding.rs): for unit primary
+// light from above, the upward fluxes above it (`up`: r, r_f, r_b) and the downward fluxes at its
+// bottom (`down`); for light from below, the 3×3 reflection `rp`, transmission `tp` and
+// q = I − rp ([out][in]). Components are added below it by the adding equations: every value
+// stays an energy (or its g-weighted share), where the reference's 6×6 transfer matrices hold
+// 1/T and 1/t_ff and overflow or divide 0 by 0 under thick media and opaque components.
+struct Tm6Slab {
+    real3 up[3];
+    real3 down[3];
+    real3 rp[3][3];
+    real3 tp[3][3];
+    real3 q[3][3];
 };
 
-Tm6Matrix tm6_identity() {
-    Tm6Matrix a;
-    for (int i = 0; i < 6; ++i) {
-        for (int j = 0; j < 6; ++j) {
-            a.m[i][j] = real3(i == j ? 1.0 : 0.0);
+Tm6Slab tm6_slab_empty() {
+    Tm6Slab s;
+    for (int i = 0; i < 3; ++i) {
+        s.up[i] = real3(0.0);
+        s.down[i] = real3(i == 0 ? 1.0 : 0.0);
+        for (int j = 0; j < 3; ++j) {
+            s.rp[i][j] = real3(0.0);
+            s.tp[i][j] = real3(i == j ? 1.0 : 0.0);
+            s.q[i][j] = s.tp[i][j];
         }
     }
-    return a;
+    return s;
 }
 
-// a ← a · I for the interface matrix I: block-diagonal, primary block p, both secondary blocks
-// s (§5.2).
-void tm6_mul_interface(inout Tm6Matrix a, TmMatrix p, TmMatrix s) {
-    for (int i = 0; i < 6; ++i) {
-        real3 a0 = a.m[i][0];
-        real3 a1 = a.m[i][1];
-        a.m[i][0] = a0 * p.m11 + a1 * p.m21;
-        a.m[i][1] = a0 * p.m12 + a1 * p.m22;
-        for (int o = 2; o <= 4; o += 2) {
-            real3 b0 = a.m[i][o];
-            real3 b1 = a.m[i][o + 1];
-            a.m[i][o] = b0 * s.m11 + b1 * s.m21;
-            a.m[i][o + 1] = b0 * s.m12 + b1 * s.m22;
+// w = a⁻¹ by the adjugate, in float whatever `real` is (a determinant of small entries falls
+// below the half-float range), floored at the smallest normal float (adding.rs: 0/0 → 0).
+void tm6_inverse(real3 m[3][3], out real3 w[3][3]) {
+    vec3 a[3][3];
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            a[i][j] = vec3(m[i][j]);
         }
     }
+    vec3 c00 = a[1][1] * a[2][2] - a[1][2] * a[2][1];
+    vec3 c01 = a[1][2] * a[2][0] - a[1][0] * a[2][2];
+    vec3 c02 = a[1][0] * a[2][1] - a[1][1] * a[2][0];
+    vec3 det = a[0][0] * c00 + a[0][1] * c01 + a[0][2] * c02;
+    vec3 inv = 1.0 / max(det, vec3(1.17549435e-38));
+    w[0][0] = real3(c00 * inv);
+    w[1][0] = real3(c01 * inv);
+    w[2][0] = real3(c02 * inv);
+    w[0][1] = real3((a[0][2] * a[2][1] - a[0][1] * a[2][2]) * inv);
+    w[1][1] = real3((a[0][0] * a[2][2] - a[0][2] * a[2][0]) * inv);
+    w[2][1] = real3((a[0][1] * a[2][0] - a[0][0] * a[2][1]) * inv);
+    w[0][2] = real3((a[0][1] * a[1][2] - a[0][2] * a[1][1]) * inv);
+    w[1][2] = real3((a[0][2] * a[1][0] - a[0][0] * a[1][2]) * inv);
+    w[2][2] = real3((a[0][0] * a[1][1] - a[0][1] * a[1][0]) * inv);
 }
 
-// a ← a · M for the homogeneous medium M of T, r_fb, t_ff (§5.4), scaled by the power of two
-// `k` ≤ 1 that brings its largest entries (1/T, 1/t_ff) to at most 1: a thick medium makes them
-// overflow half floats. Entries are formed in float and narrowed after scaling. M's non-zero
-// entries: the diagonal (1/T, T, 1/t_ff, q, 1/t_ff, q with q = t_ff − r_fb²/t_ff),
-// M₃₁ = 1/t_ff − 1/T, M₄₂ = q − T, M₃₆ = M₅₂ = M₅₄ = −r_fb/t_ff, M₄₅ = M₆₁ = M₆₃ = r_fb/t_ff
-// (1-based; fluxes 5, 6 mirror 3, 4).
-void tm6_mul_medium(inout Tm6Matrix a, vec3 transmission, vec3 r_fb, vec3 t_ff, out float k) {
-    float smallest = min(min(min(transmission.r, transmission.g), transmission.b),
-                         min(min(t_ff.r, t_ff.g), t_ff.b));
-    k = exp2(min(floor(log2(max(smallest, 1e-30))), 0.0));
-    vec3 inv = 1.0 / t_ff;
-    vec3 m00 = 1.0 / transmission;
-    vec3 q = t_ff - r_fb * r_fb * inv;
-    real3 d0 = real3(m00 * k);
-    real3 d1 = real3(transmission * k);
-    real3 d2 = real3(inv * k);
-    real3 d3 = real3(q * k);
-    real3 minus = real3(-r_fb * inv * k);
-    real3 plus = real3(r_fb * inv * k);
-    real3 c20 = real3((inv - m00) * k);
-    real3 c31 = real3((q - transmission) * k);
-    for (int i = 0; i < 6; ++i) {
-        real3 e0 = a.m[i][0];
-        real3 e1 = a.m[i][1];
-        real3 e2 = a.m[i][2];
-        real3 e3 = a.m[i][3];
-        real3 e4 = a.m[i][4];
-        real3 e5 = a.m[i][5];
-        a.m[i][0] = e0 * d0 + e2 * c20 + e5 * plus;
-        a.m[i][1] = e1 * d1 + e3 * c31 + e4 * minus;
-        a.m[i][2] = e2 * d2 + e5 * plus;
-        a.m[i][3] = e3 * d3 + e4 * minus;
-        a.m[i][4] = e3 * plus + e4 * d2;
-        a.m[i][5] = e2 * minus + e5 * d3;
+// p = w·s.rp, then the flux x = w·s.down between the stack and what is added below it.
+void tm6_gap(Tm6Slab s, real3 w[3][3], out real3 p[3][3], out real3 x[3]) {
+    for (int i = 0; i < 3; ++i) {
+        x[i] = w[i][0] * s.down[0] + w[i][1] * s.down[1] + w[i][2] * s.down[2];
+        for (int j = 0; j < 3; ++j) {
+            p[i][j] = w[i][0] * s.rp[0][j] + w[i][1] * s.rp[1][j] + w[i][2] * s.rp[2][j];
+        }
     }
 }
 
-// Scales `a` by the power of two that brings its largest entry near 1 and returns that factor.
-// Exact in binary floating point, so it changes nothing but the range: the reflectances are
-// ratios, and callers divide transmitted fluxes by the accumulated factor.
-float tm6_normalize(inout Tm6Matrix a) {
-    float largest = 0.0;
-    for (int i = 0; i < 6; ++i) {
-        for (int j = 0; j < 6; ++j) {
-            vec3 v = abs(vec3(a.m[i][j]));
-            largest = max(largest, max(max(v.r, v.g), v.b));
+// s ← s over an interface: each class on its own (block-diagonal, §5.2), the primary class
+// (k = 0) with (r, t, r', t', 1 − r, 1 − r')[0], both secondary classes with [1]. With
+// W = (q + R'·(1 − r))⁻¹, P = W·R' and V = I + r·P: R' ← r' + t·P·t', T' ← T'·V·t' and
+// q ← (q + a·R')·V·t' + a' (a = 1 − r − t and a' = 1 − r' − t': 0 for the energies).
+void tm6_over_interface(inout Tm6Slab s, real3 r[2], real3 t[2], real3 rp[2], real3 tp[2],
+                        real3 one_minus_r[2], real3 one_minus_rp[2]) {
+    real3 rd[3] = real3[3](r[0], r[1], r[1]);
+    real3 td[3] = real3[3](t[0], t[1], t[1]);
+    real3 rpd[3] = real3[3](rp[0], rp[1], rp[1]);
+    real3 tpd[3] = real3[3](tp[0], tp[1], tp[1]);
+    real3 omr[3] = real3[3](one_minus_r[0], one_minus_r[1], one_minus_r[1]);
+    real3 omrp[3] = real3[3](one_minus_rp[0], one_minus_rp[1], one_minus_rp[1]);
+    real3 x[3][3];
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            x[i][j] = s.q[i][j] + s.rp[i][j] * omr[j];
         }
     }
-    float p = exp2(-floor(log2(max(largest, 1e-30))));
-    for (int i = 0; i < 6; ++i) {
-        for (int j = 0; j < 6; ++j) {
-            a.m[i][j] *= real(p);
+    real3 w[3][3];
+    tm6_inverse(x, w);
+    real3 p[3][3];
+    real3 flux[3];
+    tm6_gap(s, w, p, flux);
+    for (int i = 0; i < 3; ++i) {
+        s.up[i] += s.tp[i][0] * rd[0] * flux[0] + s.tp[i][1] * rd[1] * flux[1]
+                 + s.tp[i][2] * rd[2] * flux[2];
+        s.down[i] = td[i] * flux[i];
+    }
+    real3 tv[3][3];
+    real3 qv[3][3];
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            real3 v = s.tp[i][j];
+            real3 u = s.q[i][j] + (omr[i] - td[i]) * s.rp[i][j];
+            for (int k = 0; k < 3; ++k) {
+                real3 rpk = rd[k] * p[k][j];
+                v += s.tp[i][k] * rpk;
+                u += (s.q[i][k] + (omr[i] - td[i]) * s.rp[i][k]) * rpk;
+            }
+            tv[i][j] = v * tpd[j];
+            qv[i][j] = u * tpd[j] + (i == j ? omrp[i] - tpd[i] : real3(0.0));
         }
     }
-    return p;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            s.tp[i][j] = tv[i][j];
+            s.q[i][j] = qv[i][j];
+            s.rp[i][j] = td[i] * p[i][j] * tpd[j] + (i == j ? rpd[i] : real3(0.0));
+        }
+    }
 }
 
-// The three upward fluxes (r, r_f, r_b) above a composed stack whose bottom reflects every
-// class with r_c (0: nothing below), and the three downward fluxes at its bottom, from the
-// top conditions a1 = 1, a3 = a5 = 0 (§5.1, §5.6). Solved in float whatever `real` is: the
-// determinant of normalized entries can fall below the half-float range.
-void tm6_extract(Tm6Matrix a, vec3 r_c, out vec3 up[3], out vec3 down[3]) {
-    vec3 c[3][3];
-    for (int row = 0; row < 3; ++row) {
-        for (int col = 0; col < 3; ++col) {
-            c[row][col] = vec3(a.m[2 * row][2 * col]) + vec3(a.m[2 * row][2 * col + 1]) * r_c;
+// s ← s over a homogeneous medium of primary transmission T, secondary back-reflection r_fb and
+// forward transmission t_ff (§5.4 in scattering form, adding.rs's Component6::medium):
+//   r = r' = [[0, 0, 0], [0, 0, r_fb], [r_fb, r_fb, 0]],
+//   t = t' = [[T, 0, 0], [t_ff − T, t_ff, 0], [0, 0, t_ff]];
+// it mixes the classes, so q ← I − R' afterwards.
+void tm6_over_medium(inout Tm6Slab s, real3 transmission, real3 r_fb, real3 t_ff) {
+    real3 cross = t_ff - transmission;
+    real3 x[3][3];
+    for (int i = 0; i < 3; ++i) {
+        x[i][0] = s.q[i][0] + s.rp[i][0] - s.rp[i][2] * r_fb;
+        x[i][1] = s.q[i][1] + s.rp[i][1] - s.rp[i][2] * r_fb;
+        x[i][2] = s.q[i][2] + s.rp[i][2] - s.rp[i][1] * r_fb;
+    }
+    real3 w[3][3];
+    tm6_inverse(x, w);
+    real3 p[3][3];
+    real3 flux[3];
+    tm6_gap(s, w, p, flux);
+    real3 back1 = r_fb * flux[2];
+    real3 back2 = r_fb * (flux[0] + flux[1]);
+    for (int i = 0; i < 3; ++i) {
+        s.up[i] += s.tp[i][1] * back1 + s.tp[i][2] * back2;
+    }
+    s.down[0] = transmission * flux[0];
+    s.down[1] = cross * flux[0] + t_ff * flux[1];
+    s.down[2] = t_ff * flux[2];
+    // V = I + r·P (rows: 0, r_fb·P₂, r_fb·(P₀ + P₁)), then T' ← T'·V·t' and R' ← r' + t·P·t'.
+    real3 tv[3][3];
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            tv[i][j] = s.tp[i][j] + s.tp[i][1] * r_fb * p[2][j]
+                     + s.tp[i][2] * r_fb * (p[0][j] + p[1][j]);
         }
     }
-    // Cramer's rule for c · (b1, b3, b5) = (1, 0, 0).
-    vec3 det = c[0][0] * (c[1][1] * c[2][2] - c[1][2] * c[2][1])
-             - c[0][1] * (c[1][0] * c[2][2] - c[1][2] * c[2][0])
-             + c[0][2] * (c[1][0] * c[2][1] - c[1][1] * c[2][0]);
-    vec3 inv_det = 1.0 / det;
-    down[0] = (c[1][1] * c[2][2] - c[1][2] * c[2][1]) * inv_det;
-    down[1] = -(c[1][0] * c[2][2] - c[1][2] * c[2][0]) * inv_det;
-    down[2] = (c[1][0] * c[2][1] - c[1][1] * c[2][0]) * inv_det;
-    for (int row = 0; row < 3; ++row) {
-        vec3 s = vec3(0.0);
-        for (int col = 0; col < 3; ++col) {
-            s += (vec3(a.m[2 * row + 1][2 * col]) + vec3(a.m[2 * row + 1][2 * col + 1]) * r_c) * down[col];
+    real3 c[3][3];
+    for (int j = 0; j < 3; ++j) {
+        c[0][j] = transmission * p[0][j];
+        c[1][j] = cross * p[0][j] + t_ff * p[1][j];
+        c[2][j] = t_ff * p[2][j];
+    }
+    for (int i = 0; i < 3; ++i) {
+        s.tp[i][0] = tv[i][0] * transmission + tv[i][1] * cross;
+        s.tp[i][1] = tv[i][1] * t_ff;
+        s.tp[i][2] = tv[i][2] * t_ff;
+        s.rp[i][0] = c[i][0] * transmission + c[i][1] * cross;
+        s.rp[i][1] = c[i][1] * t_ff;
+        s.rp[i][2] = c[i][2] * t_ff;
+    }
+    s.rp[1][2] += r_fb;
+    s.rp[2][0] += r_fb;
+    s.rp[2][1] += r_fb;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            s.q[i][j] = real3(i == j ? 1.0 : 0.0) - s.rp[i][j];
         }
-        up[row] = s;
+    }
+}
+
+// The upward fluxes above the stack over an opaque base reflecting every class with r_c (§5.6):
+// up + T'·r_c·(q + R'·(1 − r_c))⁻¹·down.
+void tm6_over_base(Tm6Slab s, real3 r_c, out real3 up[3]) {
+    real3 x[3][3];
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            x[i][j] = s.q[i][j] + s.rp[i][j] * (real3(1.0) - r_c);
+        }
+    }
+    real3 w[3][3];
+    tm6_inverse(x, w);
+    real3 flux[3];
+    for (int i = 0; i < 3; ++i) {
+        flux[i] = r_c * (w[i][0] * s.down[0] + w[i][1] * s.down[1] + w[i][2] * s.down[2]);
+    }
+    for (int i = 0; i < 3; ++i) {
+        up[i] = s.up[i] + s.tp[i][0] * flux[0] + s.tp[i][1] * flux[1] + s.tp[i][2] * flux[2];
     }
 }
 
 float tm6_safe_ratio(float num, float den) {
     return abs(den) > 1e-7 ? num / den : 0.0;
+}
+
+// 1 − e^{−x} for x ≥ 0 without the cancellation of 1.0 − exp(−x) at small x (a Taylor series
+// below 2⁻⁶, error < x⁴/24).
+float tm6_one_minus_exp_neg(float x) {
+    return x < 0.015625 ? x * (1.0 - x * (0.5 - x / 6.0)) : 1.0 - exp(-x);
+}
+
+// Back-reflection and forward transmission of the two-stream system (a, b) over optical depth
+// τ: r = S·b/(Cγ + S·a), t = γ/(Cγ + S·a) with S = sinh(γτ), C = cosh(γτ), divided through by
+// e^{γτ}/2 so that nothing grows with τ (src/model/tm6.rs: no τ clamp is needed).
+void tm6_two_stream(vec3 a, vec3 b, float tau, out vec3 r, out vec3 t) {
+    vec3 gamma = sqrt(max(a * a - b * b, vec3(0.0)));
+    vec3 x = gamma * tau;
+    vec3 spread = vec3(tm6_one_minus_exp_neg(2.0 * x.r), tm6_one_minus_exp_neg(2.0 * x.g),
+                       tm6_one_minus_exp_neg(2.0 * x.b));
+    vec3 inv = 1.0 / (gamma * (2.0 - spread) + a * spread);
+    r = b * spread * inv;
+    t = 2.0 * gamma * exp(-x) * inv;
 }
 
 // Kubelka–Munk-type two-stream factors of a medium of thickness `depth` crossed at cosine
@@ -147,40 +244,25 @@ void tm6_medium_factors(LayerGpu layer, float mu, out vec3 transmission, out vec
     vec3 sigma_sb = sigma_s * hg_lh_norm(g);
     vec3 sigma_sf = sigma_s - sigma_sb;
     vec3 sigma_ext = sigma_s + sigma_k;
-    vec3 a = sigma_ext - sigma_sf;
-    vec3 b = sigma_sb;
-    vec3 gamma = sqrt(max(a * a - b * b, vec3(0.0)));
-    vec3 a_g = sigma_ext - sigma_sf * g;
-    vec3 b_g = -sigma_sb * g;
-    vec3 gamma_g = sqrt(max(a_g * a_g - b_g * b_g, vec3(0.0)));
     float tau = layer.params.y / max(mu, 1e-7);
-    float fastest = max(max(max(gamma.r, gamma.g), gamma.b), max(max(gamma_g.r, gamma_g.g), gamma_g.b));
-    tau = min(tau, 45.0 / max(fastest, 1e-7));
-    tau = min(tau, 45.0 / max(max(sigma_ext.r, sigma_ext.g), sigma_ext.b));
-    vec3 s = sinh(gamma * tau);
-    vec3 x = 1.0 / (sqrt(1.0 + s * s) * gamma + s * a);
     transmission = exp(-sigma_ext * tau);
-    r_fb = s * b * x;
-    t_ff = gamma * x;
-    vec3 s_g = sinh(gamma_g * tau);
-    vec3 x_g = 1.0 / (sqrt(1.0 + s_g * s_g) * gamma_g + s_g * a_g);
-    vec3 rg = s_g * b_g * x_g;
-    vec3 tg = gamma_g * x_g;
+    tm6_two_stream(sigma_ext - sigma_sf, sigma_sb, tau, r_fb, t_ff);
+    vec3 rg;
+    vec3 tg;
+    tm6_two_stream(sigma_ext - sigma_sf * g, -sigma_sb * g, tau, rg, tg);
     g_rfb = (tm6_safe_ratio(rg.r, r_fb.r) + tm6_safe_ratio(rg.g, r_fb.g) + tm6_safe_ratio(rg.b, r_fb.b)) / 3.0;
     g_tff = (tm6_safe_ratio(tg.r, t_ff.r) + tm6_safe_ratio(tg.g, t_ff.g) + tm6_safe_ratio(tg.b, t_ff.b)) / 3.0;
 }
 
 // Walks the stack top to bottom for view cosine `mu`: step 2i is layer i's interface (nothing
 // when index-matched, or the substrate, which ends the walk), step 2i + 1 its medium (nothing
-// when its depth is 0). Each step composes its factors into the energy matrix `e` and the
-// asymmetry matrix `g`, extracts the three reflectances and emits the lobes the request flags
-// allow (§5.5–5.7) through tm_emit_lobe. Returns the lobe count.
+// when its depth is 0). Each step adds its factors below the energy slab `e` and the asymmetry
+// slab `g`, which hold the three reflectances as they grow, and emits the lobes the request
+// flags allow (§5.5–5.7) through tm_emit_lobe. Returns the lobe count.
 uint tm6_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3 transmittance) {
     uint layers = min(material.info.x, MAX_LAYERS);
-    Tm6Matrix e = tm6_identity();
-    Tm6Matrix g = tm6_identity();
-    // e holds the energy matrix times `scale` (see tm6_normalize).
-    float scale = 1.0;
+    Tm6Slab e = tm6_slab_empty();
+    Tm6Slab g = tm6_slab_empty();
     vec3 prev[3] = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));
     vec3 prev_g[3] = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));
     // g of the primary and secondary paths transmitted down to the current component.
@@ -198,18 +280,19 @@ uint tm6_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3
     vec3 m_t_ff = vec3(1.0);
     float m_g_rfb = 0.0;
     float m_g_tff = 1.0;
-    transmittance = vec3(0.0);
+    transmittance = vec3(1.0);
     for (uint step = 0u; step < 2u * layers; ++step) {
         uint i = step >> 1u;
         LayerGpu layer = material.layers[i];
         bool substrate = false;
-        vec3 r_c = vec3(0.0);
-        float g_r_c = 0.0;
+        real3 up[3] = e.up;
+        real3 up_g[3] = g.up;
         if ((step & 1u) == 0u && tm_is_conductor(layer)) {
             substrate = true;
-            r_c = fgd_rgb(cos_i, layer.params.x, layer.ior.rgb / eta_above,
-                          layer.kappa.rgb / eta_above);
-            g_r_c = hg_g_of_alpha(layer.params.x);
+            vec3 r_c = fgd_rgb(cos_i, layer.params.x, layer.ior.rgb / eta_above,
+                               layer.kappa.rgb / eta_above);
+            tm6_over_base(e, real3(r_c), up);
+            tm6_over_base(g, real3(r_c * hg_g_of_alpha(layer.params.x)), up_g);
             // A bare substrate emits its primary lobe too (the reference sets the flag only
             // after a dielectric, which would leave a single conductor without any lobe).
             primary = true;
@@ -264,14 +347,19 @@ uint tm6_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3
                     vec3 tau_s = tir_fraction(cos_below, hg_alpha_of_g(g_st0j_r), 1.0 / eta) * tsp;
                     rsp += tau_s; tsp -= tau_s;
                 }
-                tm6_mul_interface(e, tm_interface(real3(r), real3(t), real3(rp), real3(tp)),
-                                  tm_interface(real3(rs), real3(ts), real3(rsp), real3(tsp)));
-                scale *= tm6_normalize(e);
-                tm6_mul_interface(g, tm_interface(real3(r * g_r), real3(t * gt),
-                                                  real3(rp * g_r), real3(tp * gtp)),
-                                  tm_interface(real3(rs * g_r), real3(ts * gst),
-                                               real3(rsp * g_r), real3(tsp * gstp)));
-                tm6_normalize(g);
+                // Energies: lossless, 1 − r = t. Asymmetries: 1 − r as it is.
+                real3 et[2] = real3[2](real3(t), real3(ts));
+                real3 etp[2] = real3[2](real3(tp), real3(tsp));
+                tm6_over_interface(e, real3[2](real3(r), real3(rs)), et,
+                                   real3[2](real3(rp), real3(rsp)), etp, et, etp);
+                real3 gr[2] = real3[2](real3(r * g_r), real3(rs * g_r));
+                real3 grp[2] = real3[2](real3(rp * g_r), real3(rsp * g_r));
+                tm6_over_interface(g, gr, real3[2](real3(t * gt), real3(ts * gst)), grp,
+                                   real3[2](real3(tp * gtp), real3(tsp * gstp)),
+                                   real3[2](real3(1.0) - gr[0], real3(1.0) - gr[1]),
+                                   real3[2](real3(1.0) - grp[0], real3(1.0) - grp[1]));
+                up = e.up;
+                up_g = g.up;
                 primary = true;
                 g_t0i = g_t0j;
                 g_st0i = g_st0j;
@@ -279,33 +367,30 @@ uint tm6_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3
                 eta_above = eta_layer;
             }
         } else if (medium) {
-            float k;
-            tm6_mul_medium(e, m_transmission, m_r_fb, m_t_ff, k);
-            scale *= k * tm6_normalize(e);
-            tm6_mul_medium(g, m_transmission, m_r_fb * m_g_rfb, m_t_ff * m_g_tff, k);
-            tm6_normalize(g);
+            tm6_over_medium(e, real3(m_transmission), real3(m_r_fb), real3(m_t_ff));
+            tm6_over_medium(g, real3(m_transmission), real3(m_r_fb * m_g_rfb),
+                            real3(m_t_ff * m_g_tff));
+            up = e.up;
+            up_g = g.up;
             backward = true;
         }
-        vec3 up[3];
-        vec3 up_g[3];
-        vec3 down[3];
-        tm6_extract(e, r_c, up, down);
-        transmittance = substrate ? vec3(0.0) : (down[0] + down[1] + down[2]) * scale;
-        tm6_extract(g, r_c * g_r_c, up_g, down);
+        transmittance = substrate ? vec3(0.0) : vec3(e.down[0] + e.down[1] + e.down[2]);
         // Emit primary, secondary-forward, secondary-backward lobes (§5.7).
         bool emit[3] = bool[3](primary, primary && backward, backward);
         for (int k = 0; k < 3; ++k) {
+            vec3 now = vec3(up[k]);
+            vec3 now_g = vec3(up_g[k]);
             if (emit[k]) {
-                vec3 dg = up_g[k] - prev_g[k];
-                vec3 dr = up[k] - prev[k];
+                vec3 dg = now_g - prev_g[k];
+                vec3 dr = now - prev[k];
                 float lobe_g = min((tm6_safe_ratio(dg.r, dr.r) + tm6_safe_ratio(dg.g, dr.g)
                                     + tm6_safe_ratio(dg.b, dr.b)) / 3.0, 1.0);
                 tm_emit_lobe(max(dr, vec3(0.0)), hg_alpha_of_g(lobe_g),
                              k == 2 ? LOBE_RETRO : LOBE_MIRROR);
                 lobe_count++;
             }
-            prev[k] = up[k];
-            prev_g[k] = up_g[k];
+            prev[k] = now;
+            prev_g[k] = now_g;
         }
         if (substrate) {
             break;

@@ -1,4 +1,4 @@
-// Pieces shared by the 2-flux and 6-flux models: lobes, 2×2 energy matrices per RGB channel,
+// Pieces shared by the 2-flux and 6-flux models: lobes, the adding equations per RGB channel,
 // and the Snell chain of the mean direction (ALGORITHMS.md §2, §4.2).
 #ifndef LAMINA_LIB_TM_COMMON
 #define LAMINA_LIB_TM_COMMON
@@ -30,30 +30,54 @@ const uint TM_MAX_LOBES = MODEL == MODEL_TM6 ? 6u * MAX_LAYERS - 2u : MAX_LAYERS
 //   weight: RGB energy (directional albedo), alpha: GGX roughness, kind: LOBE_MIRROR or LOBE_RETRO
 void tm_emit_lobe(vec3 weight, float alpha, uint kind);
 
-// A 2×2 transfer matrix per RGB channel, mapping the fluxes below a component to those above.
-struct TmMatrix {
-    real3 m11, m12, m21, m22;
+// The stack composed so far, seen as two-flux scattering: from above, reflectance r and
+// transmittance t; from below, r' (rp), t' (tp) and q = 1 − r'. Components are added below it
+// by the adding equations (src/model/adding.rs, which says why not by transfer matrices: those
+// hold 1/t and fail wherever a valid stack stops transmitting, and why q is carried: the
+// denominator 1 − R'r is formed as q + R'·(1 − r), without cancellation). Every value is an
+// energy.
+struct TmSlab {
+    real3 r, t, rp, tp, q;
 };
 
-TmMatrix tm_identity() {
-    return TmMatrix(real3(1.0), real3(0.0), real3(0.0), real3(1.0));
+TmSlab tm_slab_empty() {
+    return TmSlab(real3(0.0), real3(1.0), real3(0.0), real3(1.0), real3(1.0));
 }
 
-TmMatrix tm_mul(TmMatrix a, TmMatrix b) {
-    return TmMatrix(a.m11 * b.m11 + a.m12 * b.m21, a.m11 * b.m12 + a.m12 * b.m22,
-                    a.m21 * b.m11 + a.m22 * b.m21, a.m21 * b.m12 + a.m22 * b.m22);
+// The stack `a` with a lossless component (r, t, r', t') below it (an interface: 1 − r = t):
+//   R ← R + T'·r·T/d,  T ← t·T/d,  R' ← r' + t·R'·t'/d,  T' ← T'·t'/d,  q ← t'·q/d,  d = q + R'·t.
+TmSlab tm_over(TmSlab a, real3 r, real3 t, real3 rp, real3 tp) {
+    real3 gap = real3(1.0) / max(a.q + a.rp * t, real3(REAL_GAP_FLOOR));
+    return TmSlab(a.r + a.tp * r * a.t * gap, t * a.t * gap, rp + t * a.rp * tp * gap,
+                  a.tp * tp * gap, tp * a.q * gap);
 }
 
-// Interface matrix from its scattering relations a↑ = r a↓ + t' b↑, b↓ = t a↓ + r' b↑ (§4.2):
-// M = (1/t) [1, −r'; r, t t' − r r'].
-TmMatrix tm_interface(real3 r, real3 t, real3 rp, real3 tp) {
-    real3 inv_t = real3(1.0) / t;
-    return TmMatrix(inv_t, -rp * inv_t, r * inv_t, (t * tp - r * rp) * inv_t);
+// Reflectance of the stack `a` over an opaque base of reflectance r_c.
+real3 tm_over_base(TmSlab a, real3 r_c) {
+    real3 gap = real3(1.0) / max(a.q + a.rp * (real3(1.0) - r_c), real3(REAL_GAP_FLOOR));
+    return a.r + a.tp * r_c * a.t * gap;
 }
 
-// Reflectance of a composed stack over a substrate of reflectance r_c (the paper's Eq. 24).
-real3 tm_terminate(TmMatrix m, real3 r_c) {
-    return (m.m21 + m.m22 * r_c) / (m.m11 + m.m12 * r_c);
+// The same for one channel-independent quantity of factors that are not energies (the 2-flux
+// asymmetry, g-weighted): d = q + R'·(1 − r), q ← t'·(q + R'·(1 − r − t))/d + 1 − r' − t'.
+struct TmSlab1 {
+    real r, t, rp, tp, q;
+};
+
+TmSlab1 tm_slab1_empty() {
+    return TmSlab1(real(0.0), real(1.0), real(0.0), real(1.0), real(1.0));
+}
+
+TmSlab1 tm_over1(TmSlab1 a, real r, real t, real rp, real tp) {
+    real gap = real(1.0) / max(a.q + a.rp * (real(1.0) - r), real(REAL_GAP_FLOOR));
+    return TmSlab1(a.r + a.tp * r * a.t * gap, t * a.t * gap, rp + t * a.rp * tp * gap,
+                   a.tp * tp * gap,
+                   tp * (a.q + a.rp * (real(1.0) - r - t)) * gap + (real(1.0) - rp - tp));
+}
+
+real tm_over_base1(TmSlab1 a, real r_c) {
+    real gap = real(1.0) / max(a.q + a.rp * (real(1.0) - r_c), real(REAL_GAP_FLOOR));
+    return a.r + a.tp * r_c * a.t * gap;
 }
 
 real tm_avg(real3 v) {
