@@ -137,6 +137,36 @@ impl Slab {
             self.r[c] + self.tp[c] * r_c[c] * self.t[c] * gap
         })
     }
+
+    /// This g-weighted stack with each quantity bounded by the same quantity of the energy
+    /// stack `energy` ([`bound`]).
+    pub fn bounded_by(&self, energy: &Slab) -> Slab {
+        let rp = map3(|c| bound(self.rp[c], energy.rp[c]));
+        Slab {
+            r: map3(|c| bound(self.r[c], energy.r[c])),
+            t: map3(|c| bound(self.t[c], energy.t[c])),
+            tp: map3(|c| bound(self.tp[c], energy.tp[c])),
+            q: map3(|c| {
+                if rp[c] == self.rp[c] {
+                    self.q[c]
+                } else {
+                    1.0 - rp[c]
+                }
+            }),
+            rp,
+        }
+    }
+}
+
+/// A g-weighted flux bounded by its energy: it is the energy times a mean cosine. The
+/// first-order transmitted-asymmetry factors (§4.4) are ratios of cumulative g's, above 1
+/// where refraction narrows a lobe, and the reference's composition multiplies them along
+/// multiply-reflected paths without bound: where a path's g collapses to almost 0 the ratio
+/// back up is huge (the 6-flux secondary path under a thick medium at grazing incidence gave
+/// g-weighted fluxes of 1e152 and then a NaN on the GPU). Bounding the cumulative quantities
+/// leaves every stack whose g-weighted fluxes are mean cosines as it was.
+pub(crate) fn bound(g_weighted: f64, energy: f64) -> f64 {
+    g_weighted.clamp(-energy.abs(), energy.abs())
 }
 
 /// A 3×3 operator on the three flux classes (primary, secondary forward, secondary backward),
@@ -157,7 +187,9 @@ fn apply3(a: &Mat3, x: &[Rgb; 3]) -> [Rgb; 3] {
     std::array::from_fn(|i| map3(|c| (0..3).map(|k| a[i][k][c] * x[k][c]).sum()))
 }
 
-/// a⁻¹ by its adjugate, the determinant floored at [`GAP_FLOOR`] (module docs).
+/// a⁻¹ by its adjugate. a = I − R′r is singular only where light is trapped between the stack
+/// and the component below; a determinant below 4 epsilons of its rows' scale (‖a‖∞³) is that
+/// trap at the precision's resolution, and is floored there (and at [`GAP_FLOOR`]).
 fn inverse(a: &Mat3) -> Mat3 {
     let mut inv = identity3();
     for c in 0..3 {
@@ -168,7 +200,10 @@ fn inverse(a: &Mat3) -> Mat3 {
             m(r0, c0) * m(r1, c1) - m(r0, c1) * m(r1, c0)
         };
         let det = (0..3).map(|j| m(0, j) * cof(0, j)).sum::<f64>();
-        let det = det.max(GAP_FLOOR);
+        let scale = (0..3)
+            .map(|i| (0..3).map(|j| m(i, j).abs()).sum::<f64>())
+            .fold(0.0, f64::max);
+        let det = det.max(4.0 * f64::EPSILON * scale.powi(3)).max(GAP_FLOOR);
         for (i, row) in inv.iter_mut().enumerate() {
             for (j, v) in row.iter_mut().enumerate() {
                 v[c] = cof(j, i) / det;
@@ -231,6 +266,23 @@ impl Component6 {
             tp: t,
             one_minus: None,
         }
+    }
+
+    /// The g-weighted medium: as [`Component6::medium`] with g-weighted back-reflection `gr`
+    /// and forward transmission `gt` (the primary flux keeps g = 1). A g-weighted flux is an
+    /// energy times a mean cosine, so each entry is bounded by its energy's magnitude: the
+    /// two-stream g's (g_rfb, g_tff) and the scattered part gt − T, formed as a difference,
+    /// step outside it in thick or weakly scattering media, and the composition then diverges
+    /// (the g-weighted fluxes reached 1e152).
+    pub fn medium_weighted(t_primary: Rgb, r_fb: Rgb, t_ff: Rgb, gr: Rgb, gt: Rgb) -> Self {
+        let mut m = Self::medium(
+            t_primary,
+            map3(|c| bound(gr[c], r_fb[c])),
+            map3(|c| bound(gt[c], t_ff[c])),
+        );
+        m.t[1][0] = map3(|c| bound(m.t[1][1][c] - t_primary[c], t_ff[c] - t_primary[c]));
+        m.tp = m.t;
+        m
     }
 }
 
@@ -295,6 +347,28 @@ impl Slab6 {
         }
     }
 
+    /// This g-weighted stack with each flux and operator entry bounded by the energy stack's
+    /// ([`bound`]).
+    pub fn bounded_by(&self, energy: &Slab6) -> Slab6 {
+        let vec = |g: &[Rgb; 3], e: &[Rgb; 3]| -> [Rgb; 3] {
+            std::array::from_fn(|k| map3(|c| bound(g[k][c], e[k][c])))
+        };
+        let mat = |g: &Mat3, e: &Mat3| -> Mat3 { std::array::from_fn(|i| vec(&g[i], &e[i])) };
+        let rp = mat(&self.rp, &energy.rp);
+        let q = if rp == self.rp {
+            self.q
+        } else {
+            sub3(&identity3(), &rp)
+        };
+        Slab6 {
+            up: vec(&self.up, &energy.up),
+            down: vec(&self.down, &energy.down),
+            rp,
+            tp: mat(&self.tp, &energy.tp),
+            q,
+        }
+    }
+
     /// The upward fluxes above this stack over an opaque base reflecting every class with
     /// `r_c` (§5.6).
     pub fn over_base(&self, r_c: Rgb) -> [Rgb; 3] {
@@ -319,7 +393,7 @@ mod tests {
     //! The adding equations against the transfer-matrix products they replace, where those
     //! exist (every transmission well above 0).
     use super::*;
-    use crate::model::tm2::tests::Rng;
+    use crate::model::random::Rng;
 
     type M6 = [[f64; 6]; 6];
 
@@ -391,9 +465,9 @@ mod tests {
         for _ in 0..2000 {
             let mut slab = Slab::empty();
             let mut m = [[1.0, 0.0], [0.0, 1.0]];
-            for _ in 0..1 + (rng.next() * 5.0) as usize {
-                let (r, rp) = (0.9 * rng.next(), 0.9 * rng.next());
-                let (t, tp) = ((1.0 - r) * (0.1 + 0.9 * rng.next()), 1.0 - rp);
+            for _ in 0..1 + (rng.unit() * 5.0) as usize {
+                let (r, rp) = (0.9 * rng.unit(), 0.9 * rng.unit());
+                let (t, tp) = ((1.0 - r) * (0.1 + 0.9 * rng.unit()), 1.0 - rp);
                 slab = slab.over(&Component::weighted(r, t, rp, tp));
                 let b = tm2(r, t, rp, tp);
                 m = std::array::from_fn(|i| {
@@ -402,7 +476,7 @@ mod tests {
                 assert!(close(slab.r[0], m[1][0] / m[0][0]), "{slab:?} {m:?}");
                 assert!(close(slab.t[1], 1.0 / m[0][0]), "{slab:?} {m:?}");
             }
-            let r_c = rng.next();
+            let r_c = rng.unit();
             let want = (m[1][0] + m[1][1] * r_c) / (m[0][0] + m[0][1] * r_c);
             assert!(close(slab.over_base([r_c; 3])[2], want));
         }
@@ -415,19 +489,19 @@ mod tests {
             let mut slab = Slab6::empty();
             let mut m: M6 =
                 std::array::from_fn(|i| std::array::from_fn(|j| f64::from(u8::from(i == j))));
-            for k in 0..2 + (rng.next() * 6.0) as usize {
+            for k in 0..2 + (rng.unit() * 6.0) as usize {
                 let (component, matrix) = if k % 2 == 0 {
                     let mut f = || {
-                        let (r, rp) = (0.9 * rng.next(), 0.9 * rng.next());
-                        [r, (1.0 - r) * (0.2 + 0.8 * rng.next()), rp, 1.0 - rp]
+                        let (r, rp) = (0.9 * rng.unit(), 0.9 * rng.unit());
+                        [r, (1.0 - r) * (0.2 + 0.8 * rng.unit()), rp, 1.0 - rp]
                     };
                     let (p, s) = (f(), f());
                     let slab = |f: [f64; 4]| Component::weighted(f[0], f[1], f[2], f[3]);
                     (Component6::interface(slab(p), slab(s)), tm6_interface(p, s))
                 } else {
-                    let t = 0.05 + 0.9 * rng.next();
-                    let t_ff = t + (1.0 - t) * rng.next();
-                    let r_fb = (1.0 - t_ff) * rng.next();
+                    let t = 0.05 + 0.9 * rng.unit();
+                    let t_ff = t + (1.0 - t) * rng.unit();
+                    let r_fb = (1.0 - t_ff) * rng.unit();
                     (
                         Component6::medium([t; 3], [r_fb; 3], [t_ff; 3]),
                         tm6_medium(t, r_fb, t_ff),
@@ -440,7 +514,7 @@ mod tests {
                     assert!(close(slab.up[c][1], want[c]), "{:?} vs {want:?}", slab.up);
                 }
             }
-            let r_c = rng.next();
+            let r_c = rng.unit();
             let want = extract(&m, r_c);
             let got = slab.over_base([r_c; 3]);
             for c in 0..3 {

@@ -22,6 +22,22 @@ pub fn refract(g: f64, eta: f64) -> f64 {
         .min(1.0)
 }
 
+/// Denominators below which a ratio of g's is taken as 0 ([`safe_ratio`]).
+pub const RATIO_FLOOR: f64 = 1e-7;
+
+/// `num / den`, or 0 where |den| ≤ [`RATIO_FLOOR`]. The first-order transmitted-asymmetry
+/// factors (§4.4) are ratios of cumulative g's, and a lobe's g is a ratio of g-weighted energy
+/// to energy: undefined where the lobe has collapsed (g → 0) or carries no energy. The
+/// reference guards with > 0, which f32 and f64 pass at different depths of that collapse (a
+/// g of 1e-50 is 0 in f32), so the GPU and the oracle took different branches there.
+pub fn safe_ratio(num: f64, den: f64) -> f64 {
+    if den.abs() > RATIO_FLOOR {
+        num / den
+    } else {
+        0.0
+    }
+}
+
 /// Fraction of an HG phase function in the backward hemisphere (polynomial fit, §3.5).
 pub fn lh_norm(g: f64) -> f64 {
     let b = (0.5039 - 0.8254 * g.abs() + 0.3226 * g * g).clamp(0.0, 0.5);

@@ -18,6 +18,7 @@ pub mod hg;
 pub mod microfacet;
 #[cfg(test)]
 mod properties;
+pub mod random;
 pub mod tir;
 pub mod tm2;
 pub mod tm6;
@@ -25,6 +26,14 @@ pub mod tm6;
 /// IOR of the medium above the top layer. lamina uses vacuum (1.0), so a single conductor layer
 /// has exactly the F0 the `ggx` baseline uses; the reference's Mitsuba air is 1.000277.
 pub const IOR_AIR: f64 = 1.0;
+
+/// |η − 1| below which a dielectric interface is index-matched and skipped (the reference's
+/// `ENoComponent`).
+pub const INDEX_MATCHED: f64 = 1e-5;
+
+/// |η − 1| below which a dielectric interface reflects nothing: the FGD tables do not resolve
+/// it (`fgd=karis`'s B term does not vanish as η → 1).
+pub const REFLECTS_NOTHING: f64 = 1e-3;
 
 /// One layer as the model consumes it: the interface at its top (complex IOR of the layer,
 /// GGX α of the interface) and, for the 6-flux model, the homogeneous medium filling it.
@@ -71,6 +80,15 @@ pub struct Evaluation {
 /// Directional albedo of a rough interface: FGD(μ, α, η, κ) = ∫ F·D·G2 / (4μ) dω_o.
 pub trait Fgd {
     fn fgd(&self, mu: f64, alpha: f64, eta: f64, kappa: f64) -> f64;
+}
+
+/// The directional albedo the model consumes: `fgd`'s value, within [0, 1]. Tables hold half
+/// floats and interpolate, and `fgd=karis`'s F0·A + B overshoots 1 for a near-perfect mirror
+/// (A + B of a smooth interface rounds above 1): an albedo above 1 is a component that makes
+/// light, and under a near-lossless scatterer the gap's denominator 1 − R′r went negative (the
+/// f64 model reflected 67 676).
+pub fn albedo(fgd: &dyn Fgd, mu: f64, alpha: f64, eta: f64, kappa: f64) -> f64 {
+    fgd.fgd(mu, alpha, eta, kappa).clamp(0.0, 1.0)
 }
 
 /// Total-internal-reflection correction: the fraction of a rough lobe (incidence μ, roughness α)

@@ -10,12 +10,10 @@
 //! (≤ 2e-15). The seed is printed; `LAMINA_PROPERTY_SEED=N` replays a run, and a failure prints
 //! the stack as a material file.
 
-use std::path::PathBuf;
-
 use super::fgd::ExactFgd;
+use super::random::{case_seed, random_stack, Rng};
 use super::tir::{AnalyticTir, ConstantTir, CONSTANT_FRACTION};
-use super::tm2::tests::Rng;
-use super::{tm2, tm6, Evaluation, Fgd, LayerParams, NoTir, Tir};
+use super::{tm2, tm6, Evaluation, Fgd, NoTir, Tir};
 use crate::material::Stack;
 use crate::shader::{Model, G2};
 
@@ -59,113 +57,6 @@ impl Tir for ExactTir {
     fn tir(&self, mu: f64, alpha: f64, eta: f64) -> f64 {
         crate::tables::tir::cpu_reference(mu, alpha, eta, 6)
     }
-}
-
-/// A value of `[lo, hi]` that lands on the ends (and on `special`) often.
-fn pick(rng: &mut Rng, lo: f64, hi: f64, special: &[f64]) -> f64 {
-    let u = rng.next();
-    if u < 0.1 {
-        lo
-    } else if u < 0.2 {
-        hi
-    } else if u < 0.3 && !special.is_empty() {
-        special[(rng.next() * special.len() as f64) as usize % special.len()]
-    } else {
-        lo + (hi - lo) * rng.next()
-    }
-}
-
-fn rgb(rng: &mut Rng, lo: f64, hi: f64, special: &[f64]) -> [f64; 3] {
-    if rng.next() < 0.5 {
-        [pick(rng, lo, hi, special); 3]
-    } else {
-        [
-            pick(rng, lo, hi, special),
-            pick(rng, lo, hi, special),
-            pick(rng, lo, hi, special),
-        ]
-    }
-}
-
-/// A random valid stack (the material format's rules) and a view cosine.
-fn random_case(rng: &mut Rng) -> (Stack, f64) {
-    let model = if rng.next() < 0.5 {
-        Model::Tm2
-    } else {
-        Model::Tm6
-    };
-    let n = 1 + (rng.next() * 16.0) as usize;
-    let conductor_base = rng.next() < 0.6;
-    let mut eta_above = 1.0;
-    let layers = (0..n)
-        .map(|i| {
-            let conductor = conductor_base && i == n - 1;
-            let roughness = pick(rng, 0.0, 1.0, &[1e-4, 0.5]);
-            if conductor {
-                return LayerParams {
-                    ior: rgb(rng, 1e-3, 400.0, &[0.05, 1.0, 1.5]),
-                    kappa: rgb(rng, 1e-6, 200.0, &[1e-3, 1.0, 5.0]),
-                    roughness,
-                    depth: 0.0,
-                    sigma_s: [0.0; 3],
-                    sigma_a: [0.0; 3],
-                    g: 0.0,
-                };
-            }
-            // Relative IORs at, next to and far from 1, below 1 as often as above.
-            let relative = match rng.next() {
-                x if x < 0.15 => 1.0,
-                x if x < 0.3 => 1.0 + pick(rng, -1e-4, 1e-4, &[1e-6, -1e-6, 1e-5, -1e-3]),
-                x if x < 0.65 => pick(rng, 0.05, 1.0, &[0.7, 0.99]),
-                _ => pick(rng, 1.0, 3.0, &[1.01, 1.5]),
-            };
-            let eta = (eta_above * relative).clamp(1e-3, 400.0);
-            eta_above = eta;
-            let medium = model == Model::Tm6 && rng.next() < 0.7;
-            let lossless = rng.next() < 0.3;
-            LayerParams {
-                ior: [eta; 3],
-                kappa: [0.0; 3],
-                roughness,
-                depth: if medium {
-                    pick(rng, 0.0, 100.0, &[1e-6, 49.0])
-                } else {
-                    0.0
-                },
-                sigma_s: if medium {
-                    rgb(rng, 0.0, 1000.0, &[222.0, 1e-6])
-                } else {
-                    [0.0; 3]
-                },
-                sigma_a: if medium && !lossless {
-                    rgb(rng, 0.0, 1000.0, &[1e-6, 0.1])
-                } else {
-                    [0.0; 3]
-                },
-                g: if medium {
-                    pick(rng, -0.99, 0.99, &[0.0, 0.999_999, -0.999_999])
-                } else {
-                    0.0
-                },
-            }
-        })
-        .collect();
-    let mu = pick(rng, 1e-4, 1.0, &[1e-3, 0.5]);
-    let stack = Stack {
-        name: "property case".into(),
-        model,
-        layers,
-        source: PathBuf::from("<property test>"),
-    };
-    (stack, mu)
-}
-
-/// Case `k`'s generator state: independent of how the cases are split between threads.
-fn case_seed(seed: u64, k: usize) -> u64 {
-    let mut z = seed ^ (k as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    (z ^ (z >> 31)) | 1
 }
 
 fn finite(e: &Evaluation) -> bool {
@@ -220,7 +111,7 @@ fn every_valid_stack_gives_finite_energy_conserving_values() {
                     let mut worst = f64::NEG_INFINITY;
                     for k in (worker..CASES).step_by(threads) {
                         let mut rng = Rng(case_seed(seed, k));
-                        let (stack, mu) = random_case(&mut rng);
+                        let (stack, mu) = random_stack(&mut rng, None, 16);
                         let (f, t) = (k % fgds.len(), (k / fgds.len()) % tirs.len());
                         match check(&stack, mu, fgds[f], tirs[t]) {
                             Ok(excess) => worst = worst.max(excess),

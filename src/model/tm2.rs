@@ -4,8 +4,10 @@
 //! where those exist and stay finite where they do not (`adding.rs`) — one lobe per layer. The
 //! f64 twin of `glsl/include/lib/tm2.glsl`.
 
-use super::adding::{avg, map3, Component, Slab};
-use super::{hg, Evaluation, Fgd, LayerParams, Lobe, Tir, IOR_AIR};
+use super::adding::{avg, bound, map3, Component, Slab};
+use super::{
+    albedo, hg, Evaluation, Fgd, LayerParams, Lobe, Tir, INDEX_MATCHED, IOR_AIR, REFLECTS_NOTHING,
+};
 
 /// |cos| of the mean direction refracted from `cos_i` through relative IOR η; 0 when the mean
 /// direction itself is totally reflected.
@@ -35,10 +37,10 @@ pub(crate) fn dielectric(cos_i: f64, eta: f64, alpha: f64, fgd: &dyn Fgd) -> Int
     // Rough transmission widens less than reflection (§3.4).
     let s_down = (1.0 - cos_i / (eta * cos_t.max(1e-7))).abs();
     let s_up = (1.0 - eta * cos_t / cos_i.max(1e-7)).abs();
-    let r = if (eta - 1.0).abs() < 1e-3 {
+    let r = if (eta - 1.0).abs() < REFLECTS_NOTHING {
         0.0
     } else {
-        fgd.fgd(cos_i, alpha, eta, 0.0)
+        albedo(fgd, cos_i, alpha, eta, 0.0)
     };
     Interface {
         r,
@@ -70,7 +72,8 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
         let (r_total, g_total, g_t0j) = match relative_eta(layer, eta_above) {
             None => {
                 let r_c = map3(|c| {
-                    fgd.fgd(
+                    albedo(
+                        fgd,
                         cos_i,
                         layer.roughness,
                         layer.ior[c] / eta_above,
@@ -78,13 +81,11 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
                     )
                 });
                 let g_r = hg::g_of_alpha(layer.roughness);
-                (
-                    e.over_base(r_c),
-                    avg(g.over_base([avg(r_c) * g_r; 3])),
-                    g_t0i,
-                )
+                let r_total = e.over_base(r_c);
+                let g_total = g.over_base([avg(r_c) * g_r; 3]);
+                (r_total, bound(avg(g_total), avg(r_total)), g_t0i)
             }
-            Some(eta) if (eta - 1.0).abs() < 1e-5 => (r_prev, g_prev, g_t0i),
+            Some(eta) if (eta - 1.0).abs() < INDEX_MATCHED => (r_prev, g_prev, g_t0i),
             Some(eta) => {
                 let f = dielectric(cos_i, eta, layer.roughness, fgd);
                 // First-order transmitted-asymmetry correction (§4.4).
@@ -94,12 +95,8 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
                 let g_t0j = hg::refract(g_t0i, 1.0 / eta) * f.g_t;
                 let g_t0j_r = g_t0j * g_next;
                 let g_t0j_rt = hg::refract(g_t0j_r, eta) * f.g_tp;
-                let g_t = if g_t0i > 0.0 { g_t0j / g_t0i } else { 0.0 };
-                let g_tp = if g_t0j_r > 0.0 {
-                    g_t0j_rt / g_t0j_r
-                } else {
-                    0.0
-                };
+                let g_t = hg::safe_ratio(g_t0j, g_t0i);
+                let g_tp = hg::safe_ratio(g_t0j_rt, g_t0j_r);
                 let (mut r, mut t, mut rp, mut tp) = (f.r, 1.0 - f.r, f.r, 1.0 - f.r);
                 // Total internal reflection moves energy from transmission to reflection (§4.5).
                 if eta < 1.0 {
@@ -112,12 +109,14 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
                     tp -= tau;
                 }
                 e = e.over(&Component::lossless(r, t, rp, tp));
-                g = g.over(&Component::weighted(
-                    r * f.g_r,
-                    t * g_t,
-                    rp * f.g_r,
-                    tp * g_tp,
-                ));
+                g = g
+                    .over(&Component::weighted(
+                        r * f.g_r,
+                        t * g_t,
+                        rp * f.g_r,
+                        tp * g_tp,
+                    ))
+                    .bounded_by(&e);
                 cos_i = f.mu_t;
                 eta_above = avg(layer.ior);
                 (e.r, avg(g.r), g_t0j)
@@ -153,6 +152,7 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
 pub(crate) mod tests {
     use super::*;
     use crate::model::fgd::ExactFgd;
+    use crate::model::random::Rng;
     use crate::model::{fresnel, NoTir};
     use crate::shader::G2;
 
@@ -173,18 +173,6 @@ pub(crate) mod tests {
             ior: [0.143245, 0.377423, 1.43919],
             kappa: [3.98479, 2.3847, 1.60434],
             ..coat(1.0, roughness)
-        }
-    }
-
-    /// xorshift64*, for seeded sweeps.
-    pub struct Rng(pub u64);
-
-    impl Rng {
-        pub fn next(&mut self) -> f64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
         }
     }
 
@@ -284,11 +272,11 @@ pub(crate) mod tests {
         };
         let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
         for _ in 0..60 {
-            let n = 1 + (rng.next() * 3.0) as usize;
+            let n = 1 + (rng.unit() * 3.0) as usize;
             let mut stack: Vec<LayerParams> = (0..n)
-                .map(|_| coat(1.05 + rng.next(), rng.next() * 0.8))
+                .map(|_| coat(1.05 + rng.unit(), rng.unit() * 0.8))
                 .collect();
-            let mu = 0.02 + 0.98 * rng.next();
+            let mu = 0.02 + 0.98 * rng.unit();
             let e = evaluate(&stack, mu, &fgd, &NoTir);
             for c in 0..3 {
                 assert!(
@@ -296,7 +284,7 @@ pub(crate) mod tests {
                     "{stack:?} {mu}: {e:?}"
                 );
             }
-            stack.push(gold(rng.next()));
+            stack.push(gold(rng.unit()));
             let e = evaluate(&stack, mu, &fgd, &NoTir);
             let sum = map3(|c| e.lobes.iter().map(|l| l.weight[c]).sum());
             for (s, r) in sum.iter().zip(e.reflectance) {

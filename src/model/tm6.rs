@@ -13,17 +13,10 @@
 //! (T = 0.003 through four layers of σ_s = 222, depth 49). The two-stream factors are written
 //! here in forms that only decay (e^{−γτ}, e^{−2γτ}), so no clamp is needed.
 
-use super::adding::{avg, map3, Component, Component6, Rgb, Slab6};
+use super::adding::{avg, bound, map3, Component, Component6, Rgb, Slab6};
+use super::hg::{self, safe_ratio};
 use super::tm2;
-use super::{hg, Evaluation, Fgd, LayerParams, Lobe, Tir, IOR_AIR};
-
-fn safe_ratio(num: f64, den: f64) -> f64 {
-    if den.abs() > 1e-7 {
-        num / den
-    } else {
-        0.0
-    }
-}
+use super::{albedo, Evaluation, Fgd, LayerParams, Lobe, Tir, INDEX_MATCHED, IOR_AIR};
 
 /// 1 − e^{−x} for x ≥ 0, without cancellation at small x.
 fn one_minus_exp_neg(x: f64) -> f64 {
@@ -41,33 +34,41 @@ struct Medium {
 
 /// Back-reflection and forward transmission of the two-stream system (a, b) over optical
 /// depth τ: with S = sinh(γτ), C = cosh(γτ), r = S·b/(Cγ + S·a) and t = γ/(Cγ + S·a), here
-/// divided through by e^{γτ}/2 so that nothing grows with τ.
-fn two_stream(a: f64, b: f64, tau: f64) -> (f64, f64) {
-    let gamma = (a * a - b * b).max(0.0).sqrt();
+/// divided through by e^{γτ}/2 so that nothing grows with τ. γ² = a² − b² is taken as
+/// (a − b)(a + b) from those sums as the caller forms them: a − b is the absorption alone in a
+/// nearly lossless medium, and a² − b² lost it to f32 rounding (γ = 0, then 0/0 on the GPU).
+fn two_stream(a: f64, b: f64, a_minus_b: f64, a_plus_b: f64, tau: f64) -> (f64, f64) {
+    let gamma = (a_minus_b * a_plus_b).max(0.0).sqrt();
     let x = gamma * tau;
     let (decay, spread) = ((-x).exp(), one_minus_exp_neg(2.0 * x));
     let den = gamma * (2.0 - spread) + a * spread;
     (b * spread / den, 2.0 * gamma * decay / den)
 }
 
+/// The two-stream factors of a medium (energies, then g-weighted), with a = σ_ext − σ_sf and
+/// b = σ_sb, resp. a_g = σ_ext − g·σ_sf and b_g = −g·σ_sb; their sums and differences written
+/// as sums of non-negative terms.
 fn medium_factors(layer: &LayerParams, mu: f64) -> Medium {
-    let sigma_k = map3(|c| layer.sigma_a[c].max(1e-7));
-    let sigma_sb = map3(|c| layer.sigma_s[c] * hg::lh_norm(layer.g));
-    let sigma_sf = map3(|c| layer.sigma_s[c] - sigma_sb[c]);
-    let sigma_ext = map3(|c| layer.sigma_s[c] + sigma_k[c]);
+    let g = layer.g;
     let tau = layer.depth / mu.max(1e-7);
     let (mut r_fb, mut t_ff) = ([0.0; 3], [0.0; 3]);
     let (mut rg, mut tg) = ([0.0; 3], [0.0; 3]);
+    let mut t = [0.0; 3];
     for c in 0..3 {
-        (r_fb[c], t_ff[c]) = two_stream(sigma_ext[c] - sigma_sf[c], sigma_sb[c], tau);
-        (rg[c], tg[c]) = two_stream(
-            sigma_ext[c] - sigma_sf[c] * layer.g,
-            -sigma_sb[c] * layer.g,
-            tau,
-        );
+        let sigma_k = layer.sigma_a[c].max(1e-7);
+        let sigma_sb = layer.sigma_s[c] * hg::lh_norm(g);
+        let sigma_sf = layer.sigma_s[c] - sigma_sb;
+        let sigma_ext = layer.sigma_s[c] + sigma_k;
+        let a = sigma_sb + sigma_k;
+        (r_fb[c], t_ff[c]) = two_stream(a, sigma_sb, sigma_k, 2.0 * sigma_sb + sigma_k, tau);
+        let a_g = sigma_ext - sigma_sf * g;
+        let minus = sigma_sf * (1.0 - g) + sigma_sb * (1.0 + g) + sigma_k;
+        let plus = layer.sigma_s[c] * (1.0 - g) + sigma_k;
+        (rg[c], tg[c]) = two_stream(a_g, -sigma_sb * g, minus, plus, tau);
+        t[c] = (-sigma_ext * tau).exp();
     }
     Medium {
-        t: map3(|c| (-sigma_ext[c] * tau).exp()),
+        t,
         r_fb,
         t_ff,
         g_rfb: avg(map3(|c| safe_ratio(rg[c], r_fb[c]))),
@@ -100,7 +101,8 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
         let mut steps = Vec::with_capacity(2);
         if layer.is_conductor() {
             let r_c = map3(|c| {
-                fgd.fgd(
+                albedo(
+                    fgd,
                     cos_i,
                     layer.roughness,
                     layer.ior[c] / eta_above,
@@ -113,7 +115,7 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
             });
         } else {
             let eta = avg(layer.ior) / eta_above;
-            if (eta - 1.0).abs() < 1e-5 {
+            if (eta - 1.0).abs() < INDEX_MATCHED {
                 steps.push(Step::Nothing);
             } else {
                 let f = tm2::dielectric(cos_i, eta, layer.roughness, fgd);
@@ -131,9 +133,8 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
                 let g_st0j = hg::refract(g_st0i, 1.0 / eta) * f.g_t;
                 let g_st0j_r = g_st0j * g_medium * g_next * g_medium;
                 let g_st0j_rt = hg::refract(g_st0j_r, eta) * f.g_tp;
-                let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
-                let (gt, gtp) = (ratio(g_t0j, g_t0i), ratio(g_t0j_rt, g_t0j_r));
-                let (gst, gstp) = (ratio(g_st0j, g_st0i), ratio(g_st0j_rt, g_st0j_r));
+                let (gt, gtp) = (safe_ratio(g_t0j, g_t0i), safe_ratio(g_t0j_rt, g_t0j_r));
+                let (gst, gstp) = (safe_ratio(g_st0j, g_st0i), safe_ratio(g_st0j_rt, g_st0j_r));
                 let (mut r, mut t, mut rp, mut tp) = (f.r, 1.0 - f.r, f.r, 1.0 - f.r);
                 let (mut rs, mut ts, mut rsp, mut tsp) = (r, t, rp, tp);
                 if eta < 1.0 {
@@ -171,7 +172,7 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
                 let gt = map3(|c| m.t_ff[c] * m.g_tff);
                 steps.push(Step::Medium(
                     Component6::medium(m.t, m.r_fb, m.t_ff),
-                    Component6::medium(m.t, gr, gt),
+                    Component6::medium_weighted(m.t, m.r_fb, m.t_ff, gr, gt),
                 ));
             } else {
                 steps.push(Step::Nothing);
@@ -182,7 +183,10 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
                 Step::Substrate { r_c, g_r } => {
                     primary = true;
                     transmittance = [0.0; 3];
-                    (e.over_base(r_c), g.over_base(map3(|c| r_c[c] * g_r)))
+                    let up = e.over_base(r_c);
+                    let up_g = g.over_base(map3(|c| r_c[c] * g_r));
+                    let up_g = std::array::from_fn(|k| map3(|c| bound(up_g[k][c], up[k][c])));
+                    (up, up_g)
                 }
                 Step::Interface(energy, asym) | Step::Medium(energy, asym) => {
                     // Request flags (§5.7): primary after the first interface, backward after
@@ -193,7 +197,7 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
                         backward = true;
                     }
                     e = e.over(&energy);
-                    g = g.over(&asym);
+                    g = g.over(&asym).bounded_by(&e);
                     transmittance = map3(|c| e.down[0][c] + e.down[1][c] + e.down[2][c]);
                     (e.up, g.up)
                 }
@@ -233,7 +237,8 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
 mod tests {
     use super::*;
     use crate::model::fgd::ExactFgd;
-    use crate::model::tm2::tests::{coat, gold, Rng};
+    use crate::model::random::Rng;
+    use crate::model::tm2::tests::{coat, gold};
     use crate::model::NoTir;
     use crate::shader::G2;
 
@@ -323,20 +328,20 @@ mod tests {
         };
         let mut rng = Rng(0x51ed_2701_9c3a_77b1);
         for _ in 0..60 {
-            let n = 1 + (rng.next() * 3.0) as usize;
+            let n = 1 + (rng.unit() * 3.0) as usize;
             let mut stack: Vec<LayerParams> = (0..n)
                 .map(|_| {
                     medium(
-                        1.05 + rng.next(),
-                        rng.next() * 0.8,
-                        rng.next(),
-                        3.0 * rng.next(),
+                        1.05 + rng.unit(),
+                        rng.unit() * 0.8,
+                        rng.unit(),
+                        3.0 * rng.unit(),
                         0.0,
-                        rng.next() * 1.6 - 0.7,
+                        rng.unit() * 1.6 - 0.7,
                     )
                 })
                 .collect();
-            let mu = 0.05 + 0.95 * rng.next();
+            let mu = 0.05 + 0.95 * rng.unit();
             let e = evaluate(&stack, mu, &fgd, &NoTir);
             for c in 0..3 {
                 let total = e.reflectance[c] + e.transmittance[c];
@@ -345,7 +350,7 @@ mod tests {
                     "lossless stack: R + T = {total} for {stack:?} at {mu}"
                 );
             }
-            stack.push(gold(rng.next()));
+            stack.push(gold(rng.unit()));
             let e = evaluate(&stack, mu, &fgd, &NoTir);
             for c in 0..3 {
                 assert!(

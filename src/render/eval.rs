@@ -18,6 +18,51 @@ use super::material::MaterialGpu;
 
 const LOCAL_SIZE: u32 = 64;
 
+/// How far the GPU evaluation may lie from the f64 model run with the same tables (the tables'
+/// CPU twins: `tables::fgd::FgdLookup`, `tables::tir::provider`), as absolute differences of
+/// the energies (R, T, lobe weights; all in [0, 1]) and of the HG g of lobes that carry at
+/// least 1 % of the light (their GGX α mapped back to g, hg::g_of_alpha: α(g) is steep near
+/// α = 1). tests/model_vs_cpu.rs holds them over random valid stacks (range
+/// ends, grazing angles, thick media, TIR traps) in every variant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tolerance {
+    pub energy: f64,
+    pub lobe_g: f64,
+}
+
+impl Tolerance {
+    /// The 2-flux model in f32: what is left is rounding and the sampler's filtering against
+    /// the twins' (at most 3e-4 and 9e-4 over eight seeds of 7 000 cases).
+    pub const TM2: Self = Self {
+        energy: 1e-3,
+        lobe_g: 5e-3,
+    };
+    /// The 6-flux model, in f32 under fp16 too (tm6.glsl). Light trapped between two
+    /// near-lossless thick scatterers (σ_a = 0: r_fb = 1 − 3e-5) leaks through a gap whose
+    /// 3×3 system has a condition number of ~1e4, and f32 resolves it to ~1e-3 of the energy
+    /// (6.1e-3 at most over eight seeds).
+    pub const TM6: Self = Self {
+        energy: 1e-2,
+        lobe_g: 5e-3,
+    };
+    /// The 2-flux model in half floats (11-bit mantissas): 9e-3 at most in energy; a lobe's g
+    /// is a difference of g-weighted sums over a difference of energies, so a lobe of 1 % of
+    /// the light resolves it to ~1e-3 / 1e-2 (6e-2 at most).
+    pub const TM2_FP16: Self = Self {
+        energy: 2e-2,
+        lobe_g: 0.1,
+    };
+
+    /// The tolerance of `variant`'s evaluation.
+    pub fn of(variant: VariantKey) -> Self {
+        match (variant.model, variant.fp16) {
+            (Model::Tm2, true) => Self::TM2_FP16,
+            (Model::Tm6, _) => Self::TM6,
+            _ => Self::TM2,
+        }
+    }
+}
+
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct Push {

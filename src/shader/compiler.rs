@@ -39,15 +39,50 @@ pub fn source(path: &str) -> Option<&'static str> {
         .map(|(_, s)| *s)
 }
 
-/// FNV-1a hash of every embedded GLSL file (path and text): changes whenever any shader or
-/// include changes, so tables cached on disk are rebuilt after a shader edit.
-pub fn sources_hash() -> u64 {
-    embedded::GLSL_FILES
-        .iter()
-        .flat_map(|(p, s)| p.bytes().chain([0]).chain(s.bytes()).chain([0]))
-        .fold(0xcbf2_9ce4_8422_2325, |h, b| {
-            (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
-        })
+fn fnv1a(h: u64, bytes: impl IntoIterator<Item = u8>) -> u64 {
+    bytes.into_iter().fold(h, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// The files `entry` compiles from: itself and every include it reaches, by resolved path,
+/// sorted.
+fn sources_of(entry: &str) -> Vec<(String, &'static str)> {
+    let mut seen: Vec<(String, &'static str)> = Vec::new();
+    let mut pending = vec![entry.to_owned()];
+    while let Some(path) = pending.pop() {
+        let Some(text) = source(&path) else { continue };
+        if seen.iter().any(|(p, _)| *p == path) {
+            continue;
+        }
+        for line in text.lines() {
+            let requested = line
+                .trim_start()
+                .strip_prefix("#include")
+                .and_then(|rest| rest.trim().strip_prefix('"'))
+                .and_then(|rest| rest.split('"').next());
+            if let Some(name) = requested.and_then(|r| resolve_include(r, &path).ok()) {
+                pending.push(name.resolved_name);
+            }
+        }
+        seen.push((path, text));
+    }
+    seen.sort();
+    seen
+}
+
+/// FNV-1a hash of what `entry`'s SPIR-V depends on: its text, the text of every include it
+/// reaches and the host constants. A table cached on disk is keyed on the hash of the kernel
+/// that builds it, so editing another shader does not invalidate it.
+pub fn entry_hash(entry: &str) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325;
+    for (path, text) in sources_of(entry) {
+        h = fnv1a(h, path.bytes().chain([0]).chain(text.bytes()).chain([0]));
+    }
+    for (name, value) in HOST_DEFINES {
+        h = fnv1a(h, name.bytes().chain(value.to_le_bytes()));
+    }
+    h
 }
 
 /// Every entry point (file at the top of `glsl/`), sorted.
@@ -174,6 +209,32 @@ mod tests {
         assert_eq!(r.resolved_name, "include/shared/frame.glsl");
         let e = resolve_include("lib/nope.glsl", "x.comp.glsl").unwrap_err();
         assert!(e.contains("lib/nope.glsl"), "{e}");
+    }
+
+    #[test]
+    fn an_entry_hash_covers_its_includes_only() {
+        let files: Vec<String> = sources_of("tir_table.comp.glsl")
+            .into_iter()
+            .map(|(p, _)| p)
+            .collect();
+        assert!(
+            files.contains(&"tir_table.comp.glsl".to_owned()),
+            "{files:?}"
+        );
+        assert!(
+            files.contains(&"include/lib/sampling.glsl".to_owned()),
+            "{files:?}"
+        );
+        assert!(
+            !files
+                .iter()
+                .any(|f| f.contains("tm2") || f.contains("forward")),
+            "{files:?}"
+        );
+        assert_ne!(
+            entry_hash("tir_table.comp.glsl"),
+            entry_hash("split_sum.comp.glsl")
+        );
     }
 
     #[test]

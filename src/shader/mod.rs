@@ -3,5 +3,5 @@
 mod compiler;
 pub mod variant;
 
-pub use compiler::{entry_points, source, sources_hash, ShaderCompiler, ShaderError, HOST_DEFINES};
+pub use compiler::{entry_hash, entry_points, source, ShaderCompiler, ShaderError, HOST_DEFINES};
 pub use variant::{Axis, Fgd, Model, Ndf, ShadeSpec, Tir, VariantError, VariantKey, G2};

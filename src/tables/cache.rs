@@ -1,6 +1,7 @@
 //! The on-disk cache of generated tables: `$LAMINA_CACHE/tables/` (default
 //! `~/.cache/lamina/tables/`), one file per table keyed by its kind, parameters and the hash of
-//! the embedded shaders. A file is trusted only when its header matches the key exactly and its
+//! the kernel that builds it (its source and includes, `shader::entry_hash`: editing another
+//! shader leaves it valid). A file is trusted only when its header matches the key exactly and its
 //! length and checksum match its data; anything else (truncated, edited, from another shader
 //! version) is ignored and rebuilt.
 

@@ -18,11 +18,12 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::gpu::{ComputeKernel, Gpu};
-use crate::model::microfacet;
+use crate::model::{fresnel, microfacet};
 use crate::shader::{Fgd, VariantKey, G2};
 use crate::tables::belcour::Basis;
 use crate::tables::cache;
 use crate::tables::split_sum::SplitSumTable;
+use crate::tables::{filter_axis, Texels};
 use crate::vk::{
     submit_and_wait, upload_image, Access, BindingKind, Buffer, BufferDesc, BufferUsageFlags,
     DescriptorSet, Format, Image, ImageDesc, ImageState, ImageView, Resource, Sampler, SamplerDesc,
@@ -47,6 +48,7 @@ const SLICES_PER_SUBMIT: u32 = 4;
 
 /// A vertex-centred grid over (μ, α, η, κ): μ, α ∈ [0, 1]; η and κ over their ranges.
 /// Texels are μ fastest, then α, η, κ (the layout of the stacked 3-D images).
+#[derive(Clone)]
 pub struct Grid {
     pub dims: [u32; 4],
     pub eta: (f64, f64),
@@ -147,7 +149,7 @@ pub fn grid_cache_key(kind: GridKind, g2: G2, n: u32, samples: u32) -> cache::Ke
     cache::Key {
         kind: kind.name(),
         params: vec![n, samples, crate::shader::variant::Axis::code(g2)],
-        shader_hash: crate::shader::sources_hash(),
+        shader_hash: crate::shader::entry_hash("fgd_table.comp.glsl"),
     }
 }
 
@@ -342,7 +344,7 @@ impl BelcourTable {
         let key = cache::Key {
             kind: "fgd-belcour",
             params: vec![size, samples, crate::shader::variant::Axis::code(g2)],
-            shader_hash: crate::shader::sources_hash(),
+            shader_hash: crate::shader::entry_hash("fgd_belcour.comp.glsl"),
         };
         let basis = Basis::fit();
         let count = (size * size * 4) as usize;
@@ -431,13 +433,8 @@ impl BelcourTable {
     /// texel centres, clamped at the edges.
     pub fn sample(&self, mu: f64, alpha: f64) -> [f64; 4] {
         let n = self.size as usize;
-        let axis = |x: f64| {
-            let f = (x.clamp(0.0, 1.0) * n as f64 - 0.5).clamp(0.0, (n - 1) as f64);
-            let i0 = (f.floor() as usize).min(n - 2);
-            (i0, f - i0 as f64)
-        };
-        let (i, fx) = axis(mu);
-        let (j, fy) = axis(alpha.max(0.0).sqrt());
+        let (i, fx) = filter_axis(mu, n, Texels::Centred);
+        let (j, fy) = filter_axis(alpha.max(0.0).sqrt(), n, Texels::Centred);
         let texel = |i: usize, j: usize| self.raw[j * n + i].map(f64::from);
         let lerp = |a: [f64; 4], b: [f64; 4], t: f64| {
             let mut out = a;
@@ -488,6 +485,8 @@ pub struct FgdImages {
     pub volume_view: ImageView,
     pub plane: Image,
     pub plane_view: ImageView,
+    /// The same tables on the CPU, looked up as the shader does.
+    pub twin: FgdTwin,
 }
 
 const TABLE_USAGE: crate::vk::ImageUsageFlags = crate::vk::ImageUsageFlags::from_raw(
@@ -500,7 +499,7 @@ impl FgdImages {
     pub fn for_variant(gpu: &Gpu, fgd: Fgd, g2: G2) -> Result<Self> {
         let dir = cache::dir();
         match fgd {
-            Fgd::Karis => Self::new(gpu, fgd, [2, 2, 2], &[0.0; 8], 1, &[[0.0; 4]]),
+            Fgd::Karis => Self::new(gpu, FgdTwin::Karis, [2, 2, 2], &[0.0; 8], 1, &[[0.0; 4]]),
             Fgd::Belcour => {
                 let (below, _) = load_or_build_grid(
                     gpu,
@@ -513,13 +512,14 @@ impl FgdImages {
                 )?;
                 let (table, _) =
                     BelcourTable::load_or_build(gpu, g2, SIZE, BELCOUR_SAMPLES, dir.as_deref())?;
+                let (volume, plane) = (below.texels.clone(), table.folded());
                 Self::new(
                     gpu,
-                    fgd,
+                    FgdTwin::Belcour { table, below },
                     [SIZE, SIZE, SIZE],
-                    &below.texels,
+                    &volume,
                     SIZE,
-                    &table.folded(),
+                    &plane,
                 )
             }
             Fgd::Full4d | Fgd::Resampled4d => {
@@ -551,17 +551,34 @@ impl FgdImages {
                     gpu.device.report.name
                 )));
             }
-            Self::new(gpu, fgd, [nm, na, ne * nk], &grid.texels, 1, &[[0.0; 4]])
+            let extent = [nm, na, ne * nk];
+            let twin = FgdTwin::Full4d(grid.clone());
+            Self::new(gpu, twin, extent, &grid.texels, 1, &[[0.0; 4]])
         } else {
             let texels = resample(grid, filter);
-            Self::new(gpu, fgd, [nm, na, ne * nk / 2], &texels, 1, &[[0.0; 4]])
+            let resampled = Grid {
+                dims: [nm, na, ne, nk / 2],
+                eta: grid.eta,
+                kappa: grid.kappa,
+                samples: grid.samples,
+                texels: texels.clone(),
+            };
+            let extent = [nm, na, ne * nk / 2];
+            Self::new(
+                gpu,
+                FgdTwin::Resampled4d(resampled),
+                extent,
+                &texels,
+                1,
+                &[[0.0; 4]],
+            )
         }
     }
 
     /// Uploads a 3-D R32F volume and a 2-D RGBA32F plane.
     pub fn new(
         gpu: &Gpu,
-        fgd: Fgd,
+        twin: FgdTwin,
         volume_extent: [u32; 3],
         volume: &[f32],
         plane_size: u32,
@@ -593,12 +610,113 @@ impl FgdImages {
             ImageState::FragmentRead,
         )?;
         Ok(Self {
-            fgd,
+            fgd: twin.fgd(),
             volume_view: volume_image.view("fgd volume")?,
             plane_view: plane_image.view("fgd plane")?,
             volume: volume_image,
             plane: plane_image,
+            twin,
         })
+    }
+}
+
+/// The CPU twin of what an `fgd` value's shader samples: the very texels, looked up as
+/// `lib/fgd.glsl` does (vertex-centred multilinear in μ, α, η; the κ slices lerped). With
+/// [`FgdLookup`] the f64 model runs with the GPU's own FGD, so that GPU-vs-CPU differences are
+/// the model arithmetic's (the hardware's 8-bit filter weights aside).
+pub enum FgdTwin {
+    /// `karis` reads the split-sum table, which is its own twin ([`SplitSumTable`]).
+    Karis,
+    Full4d(Grid),
+    /// The κ axis filtered down to n/2 slices.
+    Resampled4d(Grid),
+    /// The four folded integrals, and the η < 1 dielectric grid.
+    Belcour {
+        table: BelcourTable,
+        below: Grid,
+    },
+}
+
+impl FgdTwin {
+    pub fn fgd(&self) -> Fgd {
+        match self {
+            Self::Karis => Fgd::Karis,
+            Self::Full4d(_) => Fgd::Full4d,
+            Self::Resampled4d(_) => Fgd::Resampled4d,
+            Self::Belcour { .. } => Fgd::Belcour,
+        }
+    }
+}
+
+/// The sampler's weights on a vertex-centred axis of `n` points: (index, weight).
+fn vertex_axis(x: f64, n: u32) -> (u32, f64) {
+    let (i, w) = filter_axis(x, n as usize, Texels::Vertices);
+    (i as u32, w)
+}
+
+impl Grid {
+    /// Trilinear in (μ, α, η) at fractional vertex coordinates within κ slice `l`.
+    fn trilinear(
+        &self,
+        (i, fi): (u32, f64),
+        (j, fj): (u32, f64),
+        (k, fk): (u32, f64),
+        l: u32,
+    ) -> f64 {
+        let v = |di: u32, dj: u32, dk: u32| f64::from(self.texel(i + di, j + dj, k + dk, l));
+        let lerp = |a: f64, b: f64, t: f64| a + (b - a) * t;
+        let plane = |dk: u32| {
+            lerp(
+                lerp(v(0, 0, dk), v(1, 0, dk), fi),
+                lerp(v(0, 1, dk), v(1, 1, dk), fi),
+                fj,
+            )
+        };
+        lerp(plane(0), plane(1), fk)
+    }
+}
+
+/// [`FgdTwin`] (with the split-sum table for `karis`) as an FGD provider of the f64 model.
+pub struct FgdLookup<'a> {
+    pub twin: &'a FgdTwin,
+    pub split_sum: &'a SplitSumTable,
+}
+
+impl crate::model::Fgd for FgdLookup<'_> {
+    fn fgd(&self, mu: f64, alpha: f64, eta: f64, kappa: f64) -> f64 {
+        match self.twin {
+            FgdTwin::Karis => self.split_sum.fgd(mu, alpha, eta, kappa),
+            FgdTwin::Full4d(grid) | FgdTwin::Resampled4d(grid) => {
+                let n = grid.dims[0];
+                let (m, a) = (vertex_axis(mu, n), vertex_axis(alpha, n));
+                let e = vertex_axis(eta / ETA_MAX, n);
+                let fk = (kappa / KAPPA_MAX).clamp(0.0, 1.0) * f64::from(n - 1);
+                let slices = grid.dims[3];
+                let g = if slices == n {
+                    fk
+                } else {
+                    (0.5 * (fk - 0.5)).clamp(0.0, f64::from(slices - 1))
+                };
+                let s0 = (g.floor() as u32).min(slices - 2);
+                let lo = grid.trilinear(m, a, e, s0);
+                let hi = grid.trilinear(m, a, e, s0 + 1);
+                lo + (hi - lo) * (g - f64::from(s0))
+            }
+            FgdTwin::Belcour { table, below } => {
+                if kappa <= 0.0 && eta < 1.0 {
+                    let n = below.dims[0];
+                    let at = |x: f64| vertex_axis(x, n);
+                    return below.trilinear(at(mu), at(alpha), at(eta), 0);
+                }
+                let p = table.basis.fold(table.sample(mu, alpha));
+                let f0 =
+                    ((eta - 1.0).powi(2) + kappa * kappa) / ((eta + 1.0).powi(2) + kappa * kappa);
+                f0 * p[0]
+                    + p[1]
+                    + fresnel::conductor(super::belcour::CT1, eta, kappa) * p[2]
+                    + fresnel::conductor(super::belcour::CT2, eta, kappa) * p[3]
+            }
+        }
     }
 }
 

@@ -8,6 +8,7 @@
 
 use half::f16;
 
+use super::{filter_axis, Texels};
 use crate::error::Result;
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::microfacet;
@@ -44,7 +45,7 @@ impl SplitSumTable {
         let key = super::cache::Key {
             kind: "split-sum",
             params: vec![size, samples, crate::shader::variant::Axis::code(g2)],
-            shader_hash: crate::shader::sources_hash(),
+            shader_hash: crate::shader::entry_hash("split_sum.comp.glsl"),
         };
         let dir = super::cache::dir();
         let count = (size * size * 2) as usize;
@@ -152,13 +153,8 @@ impl SplitSumTable {
                 f64::from(f16::from_f32(t[1]).to_f32()),
             ]
         };
-        let axis = |u: f64| {
-            let x = (u * n as f64 - 0.5).clamp(0.0, (n - 1) as f64);
-            let i0 = (x.floor() as usize).min(n - 2);
-            (i0, x - i0 as f64)
-        };
-        let (i, fx) = axis(mu.clamp(0.0, 1.0));
-        let (j, fy) = axis(alpha.clamp(0.0, 1.0).sqrt());
+        let (i, fx) = filter_axis(mu, n, Texels::Centred);
+        let (j, fy) = filter_axis(alpha.clamp(0.0, 1.0).sqrt(), n, Texels::Centred);
         let lerp =
             |a: [f64; 2], b: [f64; 2], t: f64| [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t];
         let bottom = lerp(texel(i, j), texel(i + 1, j), fx);

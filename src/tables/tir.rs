@@ -17,6 +17,7 @@ use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::microfacet;
 use crate::shader::{Tir, VariantKey, G2};
 use crate::tables::cache;
+use crate::tables::{filter_axis, Texels};
 use crate::vk::{
     submit_and_wait, upload_image, Access, BindingKind, Buffer, BufferDesc, DescriptorSet, Format,
     Image, ImageDesc, ImageState, ImageUsageFlags, ImageView, Resource,
@@ -217,11 +218,7 @@ impl TirTable {
             let v = self.texels[(k * n + j) * n + i];
             f64::from(if half { f16::from_f32(v).to_f32() } else { v })
         };
-        let axis = |x: f64| {
-            let f = x.clamp(0.0, 1.0) * (n - 1) as f64;
-            let i0 = (f.floor() as usize).min(n - 2);
-            (i0, f - i0 as f64)
-        };
+        let axis = |x: f64| filter_axis(x, n, Texels::Vertices);
         let (i, fx) = axis(mu);
         let (j, fy) = axis(alpha);
         let (k, fz) = axis(eta);
@@ -242,7 +239,7 @@ pub fn cache_key(size: u32, samples: u32) -> cache::Key {
     cache::Key {
         kind: "tir",
         params: vec![size, samples],
-        shader_hash: crate::shader::sources_hash(),
+        shader_hash: crate::shader::entry_hash("tir_table.comp.glsl"),
     }
 }
 

@@ -80,19 +80,21 @@ float fgd_channel(float mu, float alpha, float eta, float kappa) {
     return f0 * ab.x + ab.y;
 }
 
+// The albedo the models consume: within [0, 1] (src/model/mod.rs's `albedo`: half-float,
+// interpolated tables overshoot 1 for near-perfect mirrors, and an albedo above 1 makes light).
 vec3 fgd_rgb(float mu, float alpha, vec3 eta, vec3 kappa) {
     if (FGD_MODE == FGD_KARIS) {
         vec2 ab = texture(split_sum, vec2(mu, sqrt(alpha))).rg;
-        return f0_complex(eta, kappa) * ab.x + ab.y;
+        return clamp(f0_complex(eta, kappa) * ab.x + ab.y, 0.0, 1.0);
     }
-    return vec3(
+    return clamp(vec3(
         fgd_channel(mu, alpha, eta.r, kappa.r),
         fgd_channel(mu, alpha, eta.g, kappa.g),
-        fgd_channel(mu, alpha, eta.b, kappa.b));
+        fgd_channel(mu, alpha, eta.b, kappa.b)), 0.0, 1.0);
 }
 
 float fgd_dielectric(float mu, float alpha, float eta) {
-    return fgd_channel(mu, alpha, eta, 0.0);
+    return clamp(fgd_channel(mu, alpha, eta, 0.0), 0.0, 1.0);
 }
 
 #endif

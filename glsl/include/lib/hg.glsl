@@ -23,6 +23,12 @@ float hg_refract(float g, float eta) {
     return min(sqrt(max(1.0 - (1.0 - g * g) * pow(eta, 0.75), 0.0)), 1.0);
 }
 
+// num / den, or 0 where |den| ≤ 1e-7: ratios of g's, undefined where a lobe has collapsed
+// (src/model/hg.rs's safe_ratio says why not > 0: f32 underflows long before f64).
+float hg_safe_ratio(float num, float den) {
+    return abs(den) > 1e-7 ? num / den : 0.0;
+}
+
 // Fraction of an HG phase function in the backward hemisphere (polynomial fit, §3.5).
 float hg_lh_norm(float g) {
     float b = clamp(0.5039 - 0.8254 * abs(g) + 0.3226 * g * g, 0.0, 0.5);

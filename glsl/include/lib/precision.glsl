@@ -1,6 +1,7 @@
 // Arithmetic precision of the shading math: `real` is float16_t under the `fp16` variant
 // (LAMINA_FP16, needs the shaderFloat16 device feature), float otherwise. Storage and
-// interpolants stay 32-bit; only the per-pixel math narrows.
+// interpolants stay 32-bit; only the per-pixel math of the 2-flux model and the ggx baseline
+// narrows (the 6-flux model's 3×3 adding state needs float, tm6.glsl).
 #ifndef LAMINA_LIB_PRECISION
 #define LAMINA_LIB_PRECISION
 

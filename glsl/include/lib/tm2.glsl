@@ -108,7 +108,7 @@ uint tm2_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3
         float g_t0j = g_t0i;
         if (c.conductor) {
             r_total = tm_over_base(e, c.r);
-            g_total = tm_over_base1(g, tm_avg(c.r) * real(c.gr));
+            g_total = tm_bound(tm_over_base1(g, tm_avg(c.r) * real(c.gr)), tm_avg(r_total));
         } else if (c.skip) {
             r_total = r_prev;
             g_total = g_prev;
@@ -118,8 +118,8 @@ uint tm2_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3
             g_t0j = hg_refract(g_t0i, 1.0 / c.eta) * c.gt;
             float g_t0j_r = g_t0j * g_next;
             float g_t0j_rt = hg_refract(g_t0j_r, c.eta) * c.gtp;
-            c.gt = g_t0i > 0.0 ? g_t0j / g_t0i : 0.0;
-            c.gtp = g_t0j_r > 0.0 ? g_t0j_rt / g_t0j_r : 0.0;
+            c.gt = hg_safe_ratio(g_t0j, g_t0i);
+            c.gtp = hg_safe_ratio(g_t0j_rt, g_t0j_r);
             // Total internal reflection moves energy from transmission to reflection (§4.5).
             if (c.eta < 1.0) {
                 real3 tau = real(tir_fraction(c.mu, hg_alpha_of_g(g_t0i), c.eta)) * c.t;
@@ -131,8 +131,8 @@ uint tm2_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3
                 c.tp -= tau;
             }
             e = tm_over(e, c.r, c.t, c.rp, c.tp);
-            g = tm_over1(g, c.r.x * real(c.gr), c.t.x * real(c.gt), c.rp.x * real(c.grp),
-                         c.tp.x * real(c.gtp));
+            g = tm_bounded1(tm_over1(g, c.r.x * real(c.gr), c.t.x * real(c.gt),
+                                     c.rp.x * real(c.grp), c.tp.x * real(c.gtp)), e);
             r_total = e.r;
             g_total = g.r;
         }

@@ -12,6 +12,12 @@
 // products and 3×3 extraction give the same values wherever they exist; src/model/adding.rs
 // says where they do not). An interface is block-diagonal and a medium has seven non-zero
 // operator entries, so each has its own composition function.
+//
+// The 3×3 adding state is float under fp16 too: half floats cannot resolve the gap between a
+// TIR interface and a near-lossless thick scatterer below it (1 − R'r ≈ 1e-3 and below), and
+// random valid stacks came out up to 0.44 off in reflectance. fp16=on therefore leaves the
+// 6-flux model in float and narrows the 2-flux one (tm2.glsl), whose denominators are sums of
+// non-negative terms.
 #ifndef LAMINA_LIB_TM6
 #define LAMINA_LIB_TM6
 
@@ -25,54 +31,53 @@
 // stays an energy (or its g-weighted share), where the reference's 6×6 transfer matrices hold
 // 1/T and 1/t_ff and overflow or divide 0 by 0 under thick media and opaque components.
 struct Tm6Slab {
-    real3 up[3];
-    real3 down[3];
-    real3 rp[3][3];
-    real3 tp[3][3];
-    real3 q[3][3];
+    vec3 up[3];
+    vec3 down[3];
+    vec3 rp[3][3];
+    vec3 tp[3][3];
+    vec3 q[3][3];
 };
 
 Tm6Slab tm6_slab_empty() {
     Tm6Slab s;
     for (int i = 0; i < 3; ++i) {
-        s.up[i] = real3(0.0);
-        s.down[i] = real3(i == 0 ? 1.0 : 0.0);
+        s.up[i] = vec3(0.0);
+        s.down[i] = vec3(i == 0 ? 1.0 : 0.0);
         for (int j = 0; j < 3; ++j) {
-            s.rp[i][j] = real3(0.0);
-            s.tp[i][j] = real3(i == j ? 1.0 : 0.0);
+            s.rp[i][j] = vec3(0.0);
+            s.tp[i][j] = vec3(i == j ? 1.0 : 0.0);
             s.q[i][j] = s.tp[i][j];
         }
     }
     return s;
 }
 
-// w = a⁻¹ by the adjugate, in float whatever `real` is (a determinant of small entries falls
-// below the half-float range), floored at the smallest normal float (adding.rs: 0/0 → 0).
-void tm6_inverse(real3 m[3][3], out real3 w[3][3]) {
-    vec3 a[3][3];
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) {
-            a[i][j] = vec3(m[i][j]);
-        }
-    }
+// w = a⁻¹ by the adjugate. a = I − R'r is singular only where light is trapped between the
+// stack and the component below; a determinant below 4 float epsilons of its rows' scale (|a|³)
+// is that trap at the precision's resolution (src/model/adding.rs), and is floored there.
+void tm6_inverse(vec3 m[3][3], out vec3 w[3][3]) {
+    vec3 a[3][3] = m;
     vec3 c00 = a[1][1] * a[2][2] - a[1][2] * a[2][1];
     vec3 c01 = a[1][2] * a[2][0] - a[1][0] * a[2][2];
     vec3 c02 = a[1][0] * a[2][1] - a[1][1] * a[2][0];
     vec3 det = a[0][0] * c00 + a[0][1] * c01 + a[0][2] * c02;
-    vec3 inv = 1.0 / max(det, vec3(1.17549435e-38));
-    w[0][0] = real3(c00 * inv);
-    w[1][0] = real3(c01 * inv);
-    w[2][0] = real3(c02 * inv);
-    w[0][1] = real3((a[0][2] * a[2][1] - a[0][1] * a[2][2]) * inv);
-    w[1][1] = real3((a[0][0] * a[2][2] - a[0][2] * a[2][0]) * inv);
-    w[2][1] = real3((a[0][1] * a[2][0] - a[0][0] * a[2][1]) * inv);
-    w[0][2] = real3((a[0][1] * a[1][2] - a[0][2] * a[1][1]) * inv);
-    w[1][2] = real3((a[0][2] * a[1][0] - a[0][0] * a[1][2]) * inv);
-    w[2][2] = real3((a[0][0] * a[1][1] - a[0][1] * a[1][0]) * inv);
+    vec3 scale = max(max(abs(a[0][0]) + abs(a[0][1]) + abs(a[0][2]),
+                         abs(a[1][0]) + abs(a[1][1]) + abs(a[1][2])),
+                     abs(a[2][0]) + abs(a[2][1]) + abs(a[2][2]));
+    vec3 inv = 1.0 / max(det, max(4.76837158e-7 * scale * scale * scale, vec3(1.17549435e-38)));
+    w[0][0] = c00 * inv;
+    w[1][0] = c01 * inv;
+    w[2][0] = c02 * inv;
+    w[0][1] = (a[0][2] * a[2][1] - a[0][1] * a[2][2]) * inv;
+    w[1][1] = (a[0][0] * a[2][2] - a[0][2] * a[2][0]) * inv;
+    w[2][1] = (a[0][1] * a[2][0] - a[0][0] * a[2][1]) * inv;
+    w[0][2] = (a[0][1] * a[1][2] - a[0][2] * a[1][1]) * inv;
+    w[1][2] = (a[0][2] * a[1][0] - a[0][0] * a[1][2]) * inv;
+    w[2][2] = (a[0][0] * a[1][1] - a[0][1] * a[1][0]) * inv;
 }
 
 // p = w·s.rp, then the flux x = w·s.down between the stack and what is added below it.
-void tm6_gap(Tm6Slab s, real3 w[3][3], out real3 p[3][3], out real3 x[3]) {
+void tm6_gap(Tm6Slab s, vec3 w[3][3], out vec3 p[3][3], out vec3 x[3]) {
     for (int i = 0; i < 3; ++i) {
         x[i] = w[i][0] * s.down[0] + w[i][1] * s.down[1] + w[i][2] * s.down[2];
         for (int j = 0; j < 3; ++j) {
@@ -85,74 +90,74 @@ void tm6_gap(Tm6Slab s, real3 w[3][3], out real3 p[3][3], out real3 x[3]) {
 // (k = 0) with (r, t, r', t', 1 − r, 1 − r')[0], both secondary classes with [1]. With
 // W = (q + R'·(1 − r))⁻¹, P = W·R' and V = I + r·P: R' ← r' + t·P·t', T' ← T'·V·t' and
 // q ← (q + a·R')·V·t' + a' (a = 1 − r − t and a' = 1 − r' − t': 0 for the energies).
-void tm6_over_interface(inout Tm6Slab s, real3 r[2], real3 t[2], real3 rp[2], real3 tp[2],
-                        real3 one_minus_r[2], real3 one_minus_rp[2]) {
-    real3 rd[3] = real3[3](r[0], r[1], r[1]);
-    real3 td[3] = real3[3](t[0], t[1], t[1]);
-    real3 rpd[3] = real3[3](rp[0], rp[1], rp[1]);
-    real3 tpd[3] = real3[3](tp[0], tp[1], tp[1]);
-    real3 omr[3] = real3[3](one_minus_r[0], one_minus_r[1], one_minus_r[1]);
-    real3 omrp[3] = real3[3](one_minus_rp[0], one_minus_rp[1], one_minus_rp[1]);
-    real3 x[3][3];
+void tm6_over_interface(inout Tm6Slab s, vec3 r[2], vec3 t[2], vec3 rp[2], vec3 tp[2],
+                        vec3 one_minus_r[2], vec3 one_minus_rp[2]) {
+    vec3 rd[3] = vec3[3](r[0], r[1], r[1]);
+    vec3 td[3] = vec3[3](t[0], t[1], t[1]);
+    vec3 rpd[3] = vec3[3](rp[0], rp[1], rp[1]);
+    vec3 tpd[3] = vec3[3](tp[0], tp[1], tp[1]);
+    vec3 omr[3] = vec3[3](one_minus_r[0], one_minus_r[1], one_minus_r[1]);
+    vec3 omrp[3] = vec3[3](one_minus_rp[0], one_minus_rp[1], one_minus_rp[1]);
+    vec3 x[3][3];
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
             x[i][j] = s.q[i][j] + s.rp[i][j] * omr[j];
         }
     }
-    real3 w[3][3];
+    vec3 w[3][3];
     tm6_inverse(x, w);
-    real3 p[3][3];
-    real3 flux[3];
+    vec3 p[3][3];
+    vec3 flux[3];
     tm6_gap(s, w, p, flux);
     for (int i = 0; i < 3; ++i) {
         s.up[i] += s.tp[i][0] * rd[0] * flux[0] + s.tp[i][1] * rd[1] * flux[1]
                  + s.tp[i][2] * rd[2] * flux[2];
         s.down[i] = td[i] * flux[i];
     }
-    real3 tv[3][3];
-    real3 qv[3][3];
+    vec3 tv[3][3];
+    vec3 qv[3][3];
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
-            real3 v = s.tp[i][j];
-            real3 u = s.q[i][j] + (omr[i] - td[i]) * s.rp[i][j];
+            vec3 v = s.tp[i][j];
+            vec3 u = s.q[i][j] + (omr[i] - td[i]) * s.rp[i][j];
             for (int k = 0; k < 3; ++k) {
-                real3 rpk = rd[k] * p[k][j];
+                vec3 rpk = rd[k] * p[k][j];
                 v += s.tp[i][k] * rpk;
                 u += (s.q[i][k] + (omr[i] - td[i]) * s.rp[i][k]) * rpk;
             }
             tv[i][j] = v * tpd[j];
-            qv[i][j] = u * tpd[j] + (i == j ? omrp[i] - tpd[i] : real3(0.0));
+            qv[i][j] = u * tpd[j] + (i == j ? omrp[i] - tpd[i] : vec3(0.0));
         }
     }
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
             s.tp[i][j] = tv[i][j];
             s.q[i][j] = qv[i][j];
-            s.rp[i][j] = td[i] * p[i][j] * tpd[j] + (i == j ? rpd[i] : real3(0.0));
+            s.rp[i][j] = td[i] * p[i][j] * tpd[j] + (i == j ? rpd[i] : vec3(0.0));
         }
     }
 }
 
-// s ← s over a homogeneous medium of primary transmission T, secondary back-reflection r_fb and
-// forward transmission t_ff (§5.4 in scattering form, adding.rs's Component6::medium):
+// s ← s over a homogeneous medium of primary transmission T, secondary back-reflection r_fb,
+// forward transmission t_ff and primary-to-forward transfer `cross` (t_ff − T for the energies;
+// §5.4 in scattering form, adding.rs's Component6::medium):
 //   r = r' = [[0, 0, 0], [0, 0, r_fb], [r_fb, r_fb, 0]],
-//   t = t' = [[T, 0, 0], [t_ff − T, t_ff, 0], [0, 0, t_ff]];
+//   t = t' = [[T, 0, 0], [cross, t_ff, 0], [0, 0, t_ff]];
 // it mixes the classes, so q ← I − R' afterwards.
-void tm6_over_medium(inout Tm6Slab s, real3 transmission, real3 r_fb, real3 t_ff) {
-    real3 cross = t_ff - transmission;
-    real3 x[3][3];
+void tm6_over_medium(inout Tm6Slab s, vec3 transmission, vec3 cross, vec3 r_fb, vec3 t_ff) {
+    vec3 x[3][3];
     for (int i = 0; i < 3; ++i) {
         x[i][0] = s.q[i][0] + s.rp[i][0] - s.rp[i][2] * r_fb;
         x[i][1] = s.q[i][1] + s.rp[i][1] - s.rp[i][2] * r_fb;
         x[i][2] = s.q[i][2] + s.rp[i][2] - s.rp[i][1] * r_fb;
     }
-    real3 w[3][3];
+    vec3 w[3][3];
     tm6_inverse(x, w);
-    real3 p[3][3];
-    real3 flux[3];
+    vec3 p[3][3];
+    vec3 flux[3];
     tm6_gap(s, w, p, flux);
-    real3 back1 = r_fb * flux[2];
-    real3 back2 = r_fb * (flux[0] + flux[1]);
+    vec3 back1 = r_fb * flux[2];
+    vec3 back2 = r_fb * (flux[0] + flux[1]);
     for (int i = 0; i < 3; ++i) {
         s.up[i] += s.tp[i][1] * back1 + s.tp[i][2] * back2;
     }
@@ -160,14 +165,14 @@ void tm6_over_medium(inout Tm6Slab s, real3 transmission, real3 r_fb, real3 t_ff
     s.down[1] = cross * flux[0] + t_ff * flux[1];
     s.down[2] = t_ff * flux[2];
     // V = I + r·P (rows: 0, r_fb·P₂, r_fb·(P₀ + P₁)), then T' ← T'·V·t' and R' ← r' + t·P·t'.
-    real3 tv[3][3];
+    vec3 tv[3][3];
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
             tv[i][j] = s.tp[i][j] + s.tp[i][1] * r_fb * p[2][j]
                      + s.tp[i][2] * r_fb * (p[0][j] + p[1][j]);
         }
     }
-    real3 c[3][3];
+    vec3 c[3][3];
     for (int j = 0; j < 3; ++j) {
         c[0][j] = transmission * p[0][j];
         c[1][j] = cross * p[0][j] + t_ff * p[1][j];
@@ -186,33 +191,56 @@ void tm6_over_medium(inout Tm6Slab s, real3 transmission, real3 r_fb, real3 t_ff
     s.rp[2][1] += r_fb;
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
-            s.q[i][j] = real3(i == j ? 1.0 : 0.0) - s.rp[i][j];
+            s.q[i][j] = vec3(i == j ? 1.0 : 0.0) - s.rp[i][j];
+        }
+    }
+}
+
+// A g-weighted flux bounded by its energy (tm_common.glsl's tm_bound).
+vec3 tm6_bound3(vec3 g_weighted, vec3 energy) {
+    return clamp(g_weighted, -abs(energy), abs(energy));
+}
+
+// The g-weighted stack `g` bounded entry by entry by the energy stack `e`.
+void tm6_bound(inout Tm6Slab g, Tm6Slab e) {
+    bool same = true;
+    for (int i = 0; i < 3; ++i) {
+        g.up[i] = tm6_bound3(g.up[i], e.up[i]);
+        g.down[i] = tm6_bound3(g.down[i], e.down[i]);
+        for (int j = 0; j < 3; ++j) {
+            vec3 rp = tm6_bound3(g.rp[i][j], e.rp[i][j]);
+            same = same && all(equal(rp, g.rp[i][j]));
+            g.rp[i][j] = rp;
+            g.tp[i][j] = tm6_bound3(g.tp[i][j], e.tp[i][j]);
+        }
+    }
+    if (!same) {
+        for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 3; ++j) {
+                g.q[i][j] = vec3(i == j ? 1.0 : 0.0) - g.rp[i][j];
+            }
         }
     }
 }
 
 // The upward fluxes above the stack over an opaque base reflecting every class with r_c (§5.6):
 // up + T'·r_c·(q + R'·(1 − r_c))⁻¹·down.
-void tm6_over_base(Tm6Slab s, real3 r_c, out real3 up[3]) {
-    real3 x[3][3];
+void tm6_over_base(Tm6Slab s, vec3 r_c, out vec3 up[3]) {
+    vec3 x[3][3];
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
-            x[i][j] = s.q[i][j] + s.rp[i][j] * (real3(1.0) - r_c);
+            x[i][j] = s.q[i][j] + s.rp[i][j] * (vec3(1.0) - r_c);
         }
     }
-    real3 w[3][3];
+    vec3 w[3][3];
     tm6_inverse(x, w);
-    real3 flux[3];
+    vec3 flux[3];
     for (int i = 0; i < 3; ++i) {
         flux[i] = r_c * (w[i][0] * s.down[0] + w[i][1] * s.down[1] + w[i][2] * s.down[2]);
     }
     for (int i = 0; i < 3; ++i) {
         up[i] = s.up[i] + s.tp[i][0] * flux[0] + s.tp[i][1] * flux[1] + s.tp[i][2] * flux[2];
     }
-}
-
-float tm6_safe_ratio(float num, float den) {
-    return abs(den) > 1e-7 ? num / den : 0.0;
 }
 
 // 1 − e^{−x} for x ≥ 0 without the cancellation of 1.0 − exp(−x) at small x (a Taylor series
@@ -223,9 +251,11 @@ float tm6_one_minus_exp_neg(float x) {
 
 // Back-reflection and forward transmission of the two-stream system (a, b) over optical depth
 // τ: r = S·b/(Cγ + S·a), t = γ/(Cγ + S·a) with S = sinh(γτ), C = cosh(γτ), divided through by
-// e^{γτ}/2 so that nothing grows with τ (src/model/tm6.rs: no τ clamp is needed).
-void tm6_two_stream(vec3 a, vec3 b, float tau, out vec3 r, out vec3 t) {
-    vec3 gamma = sqrt(max(a * a - b * b, vec3(0.0)));
+// e^{γτ}/2 so that nothing grows with τ (src/model/tm6.rs: no τ clamp is needed). γ² is formed
+// as (a − b)(a + b) from the caller's sums: a² − b² loses a nearly lossless medium's absorption.
+void tm6_two_stream(vec3 a, vec3 b, vec3 a_minus_b, vec3 a_plus_b, float tau, out vec3 r,
+                    out vec3 t) {
+    vec3 gamma = sqrt(max(a_minus_b * a_plus_b, vec3(0.0)));
     vec3 x = gamma * tau;
     vec3 spread = vec3(tm6_one_minus_exp_neg(2.0 * x.r), tm6_one_minus_exp_neg(2.0 * x.g),
                        tm6_one_minus_exp_neg(2.0 * x.b));
@@ -235,7 +265,9 @@ void tm6_two_stream(vec3 a, vec3 b, float tau, out vec3 r, out vec3 t) {
 }
 
 // Kubelka–Munk-type two-stream factors of a medium of thickness `depth` crossed at cosine
-// `mu` (§5.3, numerics §5.8): T, r_fb, t_ff and the g's of r_fb and t_ff.
+// `mu` (§5.3, numerics §5.8): T, r_fb, t_ff and the g's of r_fb and t_ff. As src/model/tm6.rs,
+// a = σ_sb + σ_k, b = σ_sb and a_g = σ_ext − g·σ_sf, b_g = −g·σ_sb, their sums and differences
+// written as sums of non-negative terms.
 void tm6_medium_factors(LayerGpu layer, float mu, out vec3 transmission, out vec3 r_fb,
                         out vec3 t_ff, out float g_rfb, out float g_tff) {
     vec3 sigma_s = layer.sigma_s.rgb;
@@ -246,12 +278,15 @@ void tm6_medium_factors(LayerGpu layer, float mu, out vec3 transmission, out vec
     vec3 sigma_ext = sigma_s + sigma_k;
     float tau = layer.params.y / max(mu, 1e-7);
     transmission = exp(-sigma_ext * tau);
-    tm6_two_stream(sigma_ext - sigma_sf, sigma_sb, tau, r_fb, t_ff);
+    tm6_two_stream(sigma_sb + sigma_k, sigma_sb, sigma_k, 2.0 * sigma_sb + sigma_k, tau, r_fb,
+                   t_ff);
     vec3 rg;
     vec3 tg;
-    tm6_two_stream(sigma_ext - sigma_sf * g, -sigma_sb * g, tau, rg, tg);
-    g_rfb = (tm6_safe_ratio(rg.r, r_fb.r) + tm6_safe_ratio(rg.g, r_fb.g) + tm6_safe_ratio(rg.b, r_fb.b)) / 3.0;
-    g_tff = (tm6_safe_ratio(tg.r, t_ff.r) + tm6_safe_ratio(tg.g, t_ff.g) + tm6_safe_ratio(tg.b, t_ff.b)) / 3.0;
+    tm6_two_stream(sigma_ext - sigma_sf * g, -sigma_sb * g,
+                   sigma_sf * (1.0 - g) + sigma_sb * (1.0 + g) + sigma_k,
+                   sigma_s * (1.0 - g) + sigma_k, tau, rg, tg);
+    g_rfb = (hg_safe_ratio(rg.r, r_fb.r) + hg_safe_ratio(rg.g, r_fb.g) + hg_safe_ratio(rg.b, r_fb.b)) / 3.0;
+    g_tff = (hg_safe_ratio(tg.r, t_ff.r) + hg_safe_ratio(tg.g, t_ff.g) + hg_safe_ratio(tg.b, t_ff.b)) / 3.0;
 }
 
 // Walks the stack top to bottom for view cosine `mu`: step 2i is layer i's interface (nothing
@@ -285,14 +320,17 @@ uint tm6_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3
         uint i = step >> 1u;
         LayerGpu layer = material.layers[i];
         bool substrate = false;
-        real3 up[3] = e.up;
-        real3 up_g[3] = g.up;
+        vec3 up[3] = e.up;
+        vec3 up_g[3] = g.up;
         if ((step & 1u) == 0u && tm_is_conductor(layer)) {
             substrate = true;
             vec3 r_c = fgd_rgb(cos_i, layer.params.x, layer.ior.rgb / eta_above,
                                layer.kappa.rgb / eta_above);
-            tm6_over_base(e, real3(r_c), up);
-            tm6_over_base(g, real3(r_c * hg_g_of_alpha(layer.params.x)), up_g);
+            tm6_over_base(e, vec3(r_c), up);
+            tm6_over_base(g, vec3(r_c * hg_g_of_alpha(layer.params.x)), up_g);
+            for (int k = 0; k < 3; ++k) {
+                up_g[k] = tm6_bound3(up_g[k], up[k]);
+            }
             // A bare substrate emits its primary lobe too (the reference sets the flag only
             // after a dielectric, which would leave a single conductor without any lobe).
             primary = true;
@@ -324,14 +362,14 @@ uint tm6_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3
                 float g_t0j = hg_refract(g_t0i, 1.0 / eta) * g_t;
                 float g_t0j_r = g_t0j * g_next;
                 float g_t0j_rt = hg_refract(g_t0j_r, eta) * g_tp;
-                float gt = g_t0i > 0.0 ? g_t0j / g_t0i : 0.0;
-                float gtp = g_t0j_r > 0.0 ? g_t0j_rt / g_t0j_r : 0.0;
+                float gt = hg_safe_ratio(g_t0j, g_t0i);
+                float gtp = hg_safe_ratio(g_t0j_rt, g_t0j_r);
                 // Secondary path: the medium's forward transmission down and up (§5.5).
                 float g_st0j = hg_refract(g_st0i, 1.0 / eta) * g_t;
                 float g_st0j_r = g_st0j * g_medium * g_next * g_medium;
                 float g_st0j_rt = hg_refract(g_st0j_r, eta) * g_tp;
-                float gst = g_st0i > 0.0 ? g_st0j / g_st0i : 0.0;
-                float gstp = g_st0j_r > 0.0 ? g_st0j_rt / g_st0j_r : 0.0;
+                float gst = hg_safe_ratio(g_st0j, g_st0i);
+                float gstp = hg_safe_ratio(g_st0j_rt, g_st0j_r);
                 float r0 = abs(eta - 1.0) < 1e-3 ? 0.0 : fgd_dielectric(cos_i, alpha, eta);
                 vec3 r = vec3(r0), t = vec3(1.0 - r0), rp = vec3(r0), tp = vec3(1.0 - r0);
                 vec3 rs = r, ts = t, rsp = rp, tsp = tp;
@@ -348,16 +386,17 @@ uint tm6_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3
                     rsp += tau_s; tsp -= tau_s;
                 }
                 // Energies: lossless, 1 − r = t. Asymmetries: 1 − r as it is.
-                real3 et[2] = real3[2](real3(t), real3(ts));
-                real3 etp[2] = real3[2](real3(tp), real3(tsp));
-                tm6_over_interface(e, real3[2](real3(r), real3(rs)), et,
-                                   real3[2](real3(rp), real3(rsp)), etp, et, etp);
-                real3 gr[2] = real3[2](real3(r * g_r), real3(rs * g_r));
-                real3 grp[2] = real3[2](real3(rp * g_r), real3(rsp * g_r));
-                tm6_over_interface(g, gr, real3[2](real3(t * gt), real3(ts * gst)), grp,
-                                   real3[2](real3(tp * gtp), real3(tsp * gstp)),
-                                   real3[2](real3(1.0) - gr[0], real3(1.0) - gr[1]),
-                                   real3[2](real3(1.0) - grp[0], real3(1.0) - grp[1]));
+                vec3 et[2] = vec3[2](vec3(t), vec3(ts));
+                vec3 etp[2] = vec3[2](vec3(tp), vec3(tsp));
+                tm6_over_interface(e, vec3[2](vec3(r), vec3(rs)), et,
+                                   vec3[2](vec3(rp), vec3(rsp)), etp, et, etp);
+                vec3 gr[2] = vec3[2](vec3(r * g_r), vec3(rs * g_r));
+                vec3 grp[2] = vec3[2](vec3(rp * g_r), vec3(rsp * g_r));
+                tm6_over_interface(g, gr, vec3[2](vec3(t * gt), vec3(ts * gst)), grp,
+                                   vec3[2](vec3(tp * gtp), vec3(tsp * gstp)),
+                                   vec3[2](vec3(1.0) - gr[0], vec3(1.0) - gr[1]),
+                                   vec3[2](vec3(1.0) - grp[0], vec3(1.0) - grp[1]));
+                tm6_bound(g, e);
                 up = e.up;
                 up_g = g.up;
                 primary = true;
@@ -367,9 +406,16 @@ uint tm6_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3
                 eta_above = eta_layer;
             }
         } else if (medium) {
-            tm6_over_medium(e, real3(m_transmission), real3(m_r_fb), real3(m_t_ff));
-            tm6_over_medium(g, real3(m_transmission), real3(m_r_fb * m_g_rfb),
-                            real3(m_t_ff * m_g_tff));
+            vec3 mt = vec3(m_transmission);
+            vec3 mr = vec3(m_r_fb);
+            vec3 mtf = vec3(m_t_ff);
+            tm6_over_medium(e, mt, mtf - mt, mr, mtf);
+            // The g-weighted medium, each entry bounded by its energy (adding.rs's
+            // Component6::medium_weighted).
+            vec3 gt = tm6_bound3(vec3(m_t_ff * m_g_tff), mtf);
+            tm6_over_medium(g, mt, tm6_bound3(gt - mt, mtf - mt), tm6_bound3(vec3(m_r_fb * m_g_rfb), mr),
+                            gt);
+            tm6_bound(g, e);
             up = e.up;
             up_g = g.up;
             backward = true;
@@ -383,8 +429,8 @@ uint tm6_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3
             if (emit[k]) {
                 vec3 dg = now_g - prev_g[k];
                 vec3 dr = now - prev[k];
-                float lobe_g = min((tm6_safe_ratio(dg.r, dr.r) + tm6_safe_ratio(dg.g, dr.g)
-                                    + tm6_safe_ratio(dg.b, dr.b)) / 3.0, 1.0);
+                float lobe_g = min((hg_safe_ratio(dg.r, dr.r) + hg_safe_ratio(dg.g, dr.g)
+                                    + hg_safe_ratio(dg.b, dr.b)) / 3.0, 1.0);
                 tm_emit_lobe(max(dr, vec3(0.0)), hg_alpha_of_g(lobe_g),
                              k == 2 ? LOBE_RETRO : LOBE_MIRROR);
                 lobe_count++;

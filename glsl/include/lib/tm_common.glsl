@@ -75,6 +75,20 @@ TmSlab1 tm_over1(TmSlab1 a, real r, real t, real rp, real tp) {
                    tp * (a.q + a.rp * (real(1.0) - r - t)) * gap + (real(1.0) - rp - tp));
 }
 
+// A g-weighted flux bounded by its energy (a mean cosine is within ±1; src/model/adding.rs's
+// `bound`: the reference's first-order ratios of g's diverge along multiply-reflected paths).
+real tm_bound(real g_weighted, real energy) {
+    return clamp(g_weighted, -abs(energy), abs(energy));
+}
+
+// The g-weighted 2-flux stack `g` bounded by the energy stack `e` (grey: a dielectric stack's
+// energies are the same in every channel).
+TmSlab1 tm_bounded1(TmSlab1 g, TmSlab e) {
+    real rp = tm_bound(g.rp, e.rp.x);
+    return TmSlab1(tm_bound(g.r, e.r.x), tm_bound(g.t, e.t.x), rp, tm_bound(g.tp, e.tp.x),
+                   rp == g.rp ? g.q : real(1.0) - rp);
+}
+
 real tm_over_base1(TmSlab1 a, real r_c) {
     real gap = real(1.0) / max(a.q + a.rp * (real(1.0) - r_c), real(REAL_GAP_FLOOR));
     return a.r + a.tp * r_c * a.t * gap;
