@@ -3,7 +3,7 @@
 //! the kernel that builds it (its source and includes, `shader::entry_hash`: editing another
 //! shader leaves it valid). A file is trusted only when its header matches the key exactly and its
 //! length and checksum match its data; anything else (truncated, edited, from another shader
-//! version) is ignored and rebuilt.
+//! version) is ignored and rebuilt, and storing a table removes its other versions.
 
 use std::path::{Path, PathBuf};
 
@@ -94,10 +94,62 @@ pub fn store(dir: &Path, key: &Key, values: &[f32]) -> crate::error::Result<Path
     crate::imageio::write_atomically(&path, |temp| {
         std::fs::write(temp, &bytes).map_err(|e| e.to_string())
     })?;
+    remove_stale(dir, key);
     Ok(path)
+}
+
+/// Deletes the files of `key`'s kind and parameters built by other versions of its kernel: a
+/// shader edit would otherwise leave a 64 MB FGD table behind each time.
+fn remove_stale(dir: &Path, key: &Key) {
+    let current = key.file_name();
+    let prefix = &current[..current.len() - "0123456789abcdef.bin".len()];
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let hash = name
+            .strip_prefix(prefix)
+            .and_then(|rest| rest.strip_suffix(".bin"));
+        if name != current
+            && hash.is_some_and(|h| h.len() == 16 && h.bytes().all(|b| b.is_ascii_hexdigit()))
+        {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
 }
 
 /// The file a key is cached in under `dir`.
 pub fn path_of(dir: &Path, key: &Key) -> PathBuf {
     dir.join(key.file_name())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn storing_a_table_removes_its_other_versions_only() {
+        let dir = std::env::temp_dir().join(format!("lamina-cache-test-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let key = |params: Vec<u32>, shader_hash| Key {
+            kind: "tir",
+            params,
+            shader_hash,
+        };
+        store(&dir, &key(vec![8, 64], 1), &[1.0]).unwrap();
+        store(&dir, &key(vec![8, 32], 1), &[2.0]).unwrap();
+        store(&dir, &key(vec![8, 64], 2), &[3.0]).unwrap();
+        assert!(
+            load(&dir, &key(vec![8, 64], 1), 1).is_none(),
+            "the old version is gone"
+        );
+        assert_eq!(load(&dir, &key(vec![8, 64], 2), 1), Some(vec![3.0]));
+        assert_eq!(
+            load(&dir, &key(vec![8, 32], 1), 1),
+            Some(vec![2.0]),
+            "other parameters stay"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
