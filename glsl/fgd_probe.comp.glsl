@@ -2,16 +2,14 @@
 // Samples FGD(μ, α, η, κ) at given points exactly as the shading passes do (lib/fgd.glsl, the
 // FGD_MODE constant): the GPU side of the FGD error studies and table tests.
 #include "shared/variant.glsl"
+#include "bindings/shading.glsl"
 
 layout(local_size_x = 64) in;
 
-layout(set = 0, binding = 0) uniform sampler2D split_sum;
-layout(set = 0, binding = 1) uniform sampler3D fgd_table;
-layout(set = 0, binding = 2) uniform sampler2D fgd_belcour;
-layout(set = 0, binding = 3, std430) readonly buffer Points {
+layout(set = 1, binding = 0, std430) readonly buffer Points {
     vec4 points[];   // (μ, α, η, κ)
 } points;
-layout(set = 0, binding = 4, std430) writeonly buffer Values {
+layout(set = 1, binding = 1, std430) writeonly buffer Values {
     float values[];
 } values;
 

@@ -5,21 +5,9 @@
 // MODEL = ggx: one GGX lobe of the top layer, energy F0·A + B (Karis 2013) — the yardstick
 // every transfer-matrix variant is divided by. MODEL = tm2 / tm6: the lobes of the
 // transfer-matrix model (lib/tm2.glsl, lib/tm6.glsl).
-#include "shared/frame.glsl"
 #include "shared/variant.glsl"
-#include "shared/material.glsl"
-
-layout(set = 0, binding = 0, std140) uniform Frame {
-    FrameConstants frame;
-};
-layout(set = 0, binding = 1) uniform samplerCube prefiltered;
-layout(set = 0, binding = 2) uniform sampler2D split_sum;
-layout(set = 0, binding = 3, std140) uniform Material {
-    MaterialGpu material;
-};
-layout(set = 0, binding = 4) uniform sampler3D tir_table;
-layout(set = 0, binding = 5) uniform sampler3D fgd_table;
-layout(set = 0, binding = 6) uniform sampler2D fgd_belcour;
+#include "bindings/shading.glsl"
+#include "bindings/scene.glsl"
 
 #include "lib/ibl.glsl"
 #include "lib/tm2.glsl"
@@ -62,9 +50,9 @@ vec3 shade_lobes(vec3 n, vec3 v, float n_dot_v) {
     vec3 reflectance;
     vec3 transmittance;
     if (MODEL == MODEL_TM6) {
-        tm6_evaluate(material, n_dot_v, reflectance, transmittance);
+        tm6_evaluate(n_dot_v, reflectance, transmittance);
     } else {
-        tm2_evaluate(material, n_dot_v, reflectance, transmittance);
+        tm2_evaluate(n_dot_v, reflectance, transmittance);
     }
     return shade_sum;
 }

@@ -1,9 +1,5 @@
 #version 460
-#include "shared/frame.glsl"
-
-layout(set = 0, binding = 0, std140) uniform Frame {
-    FrameConstants frame;
-};
+#include "bindings/scene.glsl"
 
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec3 normal;

@@ -3,23 +3,16 @@
 // --backend gpu` and of the GPU-vs-CPU tests. Same library code as the forward pass.
 // Output per sample, `stride` vec4s: (R, lobe count), (T, 0), then (weight, α) per lobe.
 #include "shared/variant.glsl"
-#include "shared/material.glsl"
+#include "bindings/shading.glsl"
 
 layout(local_size_x = 64) in;
 
-layout(set = 0, binding = 0, std140) uniform Material {
-    MaterialGpu material;
-};
-layout(set = 0, binding = 1) uniform sampler2D split_sum;
-layout(set = 0, binding = 2, std430) readonly buffer Samples {
+layout(set = 1, binding = 0, std430) readonly buffer Samples {
     float cos_theta[];
 } samples;
-layout(set = 0, binding = 3, std430) writeonly buffer Results {
+layout(set = 1, binding = 1, std430) writeonly buffer Results {
     vec4 values[];
 } results;
-layout(set = 0, binding = 4) uniform sampler3D tir_table;
-layout(set = 0, binding = 5) uniform sampler3D fgd_table;
-layout(set = 0, binding = 6) uniform sampler2D fgd_belcour;
 
 layout(push_constant) uniform Push {
     uint sample_count;
@@ -52,8 +45,8 @@ void main() {
     vec3 transmittance;
     float mu = samples.cos_theta[i];
     uint count = MODEL == MODEL_TM6
-        ? tm6_evaluate(material, mu, reflectance, transmittance)
-        : tm2_evaluate(material, mu, reflectance, transmittance);
+        ? tm6_evaluate(mu, reflectance, transmittance)
+        : tm2_evaluate(mu, reflectance, transmittance);
     results.values[base] = vec4(reflectance, float(count));
     results.values[base + 1u] = vec4(transmittance, 0.0);
 }

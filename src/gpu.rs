@@ -29,8 +29,11 @@ impl Gpu {
     }
 }
 
-/// A compute entry point with its single descriptor set layout and push-constant block.
+/// A compute entry point with its own descriptor set layout and push-constant block, after
+/// the set layouts it shares with other passes (the shading inputs are set 0 of every entry
+/// point that shades).
 pub struct ComputeKernel {
+    /// The kernel's own set: index `shared_sets`.
     pub set_layout: DescriptorSetLayout,
     pub layout: PipelineLayout,
     pub pipeline: Pipeline,
@@ -44,14 +47,16 @@ impl ComputeKernel {
         push_constant_bytes: u32,
         spec: &S,
     ) -> Result<Self> {
-        Self::with_defines(gpu, entry, &[], bindings, push_constant_bytes, spec)
+        Self::with_sets(gpu, entry, &[], &[], bindings, push_constant_bytes, spec)
     }
 
-    /// As [`ComputeKernel::new`], with preprocessor definitions (a variant's `defines()`).
-    pub fn with_defines<S: SpecConstants>(
+    /// As [`ComputeKernel::new`], with preprocessor definitions (a variant's `defines()`) and
+    /// `shared` set layouts bound before the kernel's own (sets 0, 1, …; its own is last).
+    pub fn with_sets<S: SpecConstants>(
         gpu: &Gpu,
         entry: &str,
         defines: &[(&str, &str)],
+        shared: &[&DescriptorSetLayout],
         bindings: &[BindingKind],
         push_constant_bytes: u32,
         spec: &S,
@@ -59,13 +64,10 @@ impl ComputeKernel {
         let spirv = gpu.shaders.compile(entry, defines)?;
         let device = &gpu.device;
         let set_layout = DescriptorSetLayout::new(device, bindings, Stages::Compute, entry)?;
-        let layout = PipelineLayout::new(
-            device,
-            &[&set_layout],
-            push_constant_bytes,
-            Stages::Compute,
-            entry,
-        )?;
+        let mut sets = shared.to_vec();
+        sets.push(&set_layout);
+        let layout =
+            PipelineLayout::new(device, &sets, push_constant_bytes, Stages::Compute, entry)?;
         let pipeline = Pipeline::compute(device, &layout, &spirv, spec, entry)?;
         Ok(Self {
             set_layout,
@@ -74,8 +76,8 @@ impl ComputeKernel {
         })
     }
 
-    /// Records one dispatch of the kernel: binds it with `set` and `push`, then dispatches
-    /// `groups` workgroups.
+    /// Records one dispatch of a kernel with no shared sets: binds it with `set` and `push`,
+    /// then dispatches `groups` workgroups.
     pub fn record_dispatch<P: bytemuck::Pod>(
         &self,
         rec: &mut Recorder,
@@ -83,8 +85,21 @@ impl ComputeKernel {
         push: &P,
         groups: [u32; 3],
     ) {
+        self.record_dispatch_sets(rec, &[set], push, groups);
+    }
+
+    /// As [`ComputeKernel::record_dispatch`], with every set in order (the shared ones first).
+    pub fn record_dispatch_sets<P: bytemuck::Pod>(
+        &self,
+        rec: &mut Recorder,
+        sets: &[&DescriptorSet],
+        push: &P,
+        groups: [u32; 3],
+    ) {
         rec.bind_pipeline(&self.pipeline);
-        rec.bind_set(&self.pipeline, &self.layout, 0, set);
+        for (index, set) in sets.iter().enumerate() {
+            rec.bind_set(&self.pipeline, &self.layout, index as u32, set);
+        }
         rec.push_constants(&self.layout, push);
         rec.dispatch(groups[0], groups[1], groups[2]);
     }

@@ -10,8 +10,6 @@ use lamina::model::{
 };
 use lamina::render::eval::{GpuEvaluator, Tolerance};
 use lamina::shader::{Model, VariantKey};
-use lamina::tables::fgd::FgdLookup;
-use lamina::tables::tir::provider;
 
 /// Metals of ALGORITHMS.md §12.2 (Au, Ag, Al, Cu, Cr).
 const METALS: [([f64; 3], [f64; 3]); 5] = [
@@ -131,10 +129,11 @@ fn gpu_matches_cpu_oracle_on_random_cases() {
             let cosines: Vec<f64> = (0..5).map(|_| rng.range(0.05, 1.0)).collect();
             let on_gpu = evaluator.evaluate(&stack, &cosines).unwrap();
             for (&mu, g) in cosines.iter().zip(&on_gpu) {
-                let tir = provider(variant.tir, &evaluator.tir);
+                let tir = evaluator.tir_lookup();
+                let fgd = evaluator.fgd_lookup();
                 let cpu = match variant.model {
-                    Model::Tm6 => tm6::evaluate(&stack, mu, &evaluator.table, tir.as_ref()),
-                    _ => tm2::evaluate(&stack, mu, &evaluator.table, tir.as_ref()),
+                    Model::Tm6 => tm6::evaluate(&stack, mu, &fgd, tir.as_ref()),
+                    _ => tm2::evaluate(&stack, mu, &fgd, tir.as_ref()),
                 };
                 assert!(
                     finite(g),
@@ -183,7 +182,7 @@ fn six_flux_emits_its_largest_lobe_count_on_the_gpu() {
         let cosines = [0.2, 0.6, 1.0];
         let on_gpu = evaluator.evaluate(&stack, &cosines).unwrap();
         for (&mu, g) in cosines.iter().zip(&on_gpu) {
-            let cpu = tm6::evaluate(&stack, mu, &evaluator.table, &NoTir);
+            let cpu = tm6::evaluate(&stack, mu, &evaluator.fgd_lookup(), &NoTir);
             assert_eq!(cpu.lobes.len(), 6 * n - 2, "CPU lobe count at μ = {mu}");
             assert_eq!(evaluator.max_lobes(), 6 * n - 2);
             let err = compare(g, &cpu);
@@ -246,11 +245,8 @@ fn random_valid_stacks_match_the_oracle_in_every_variant() {
             continue;
         }
         let evaluator = GpuEvaluator::new(&gpu, variant).unwrap();
-        let fgd = FgdLookup {
-            twin: &evaluator.fgd.twin,
-            split_sum: &evaluator.table,
-        };
-        let tir = provider(variant.tir, &evaluator.tir);
+        let fgd = evaluator.fgd_lookup();
+        let tir = evaluator.tir_lookup();
         let tolerance = Tolerance::of(variant);
         let (mut worst_energy, mut worst_alpha) = (0.0f64, 0.0f64);
         for k in 0..100 {

@@ -5,16 +5,15 @@
 use crate::error::{Error, Result};
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::{Evaluation, LayerParams, Lobe};
+use crate::shader::interface::material_buffer;
 use crate::shader::{Model, VariantKey};
-use crate::tables::fgd::FgdImages;
-use crate::tables::split_sum::{self, SplitSumTable};
-use crate::tables::tir::TirTable;
+use crate::tables::fgd::FgdLookup;
 use crate::vk::{
     submit_and_wait, Access, BindingKind, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
-    Resource, Sampler, SamplerDesc,
+    Resource,
 };
 
-use super::material::MaterialGpu;
+use super::inputs::ShadingInputs;
 
 const LOCAL_SIZE: u32 = 64;
 
@@ -73,15 +72,10 @@ struct Push {
 pub struct GpuEvaluator<'g> {
     gpu: &'g Gpu,
     pub variant: VariantKey,
+    /// Set 0: the tables the variant samples (and their CPU twins).
+    pub inputs: ShadingInputs<'g>,
+    /// Set 1: the view cosines in, the results out.
     kernel: ComputeKernel,
-    /// The FGD table the shader samples (`fgd=karis`); CPU runs that must match the GPU use it
-    /// as their provider.
-    pub table: SplitSumTable,
-    /// The TIR table the shader samples (`tir=lut32`/`lut16`; zeros otherwise).
-    pub tir: TirTable,
-    /// The FGD tables of `fgd` values other than `karis` (zeros for `karis`).
-    pub fgd: FgdImages,
-    sampler: Sampler,
 }
 
 impl<'g> GpuEvaluator<'g> {
@@ -97,40 +91,35 @@ impl<'g> GpuEvaluator<'g> {
                 gpu.device.report.name
             )));
         }
-        let kernel = ComputeKernel::with_defines(
+        let mut inputs = ShadingInputs::new(gpu)?;
+        inputs.prepare(variant)?;
+        let kernel = ComputeKernel::with_sets(
             gpu,
             "tm_eval.comp.glsl",
             &variant.defines(),
-            &[
-                BindingKind::UniformBuffer,
-                BindingKind::SampledImage,
-                BindingKind::StorageBuffer,
-                BindingKind::StorageBuffer,
-                BindingKind::SampledImage,
-                BindingKind::SampledImage,
-                BindingKind::SampledImage,
-            ],
+            &[&inputs.layout.set_layout],
+            &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
             std::mem::size_of::<Push>() as u32,
             &variant.spec(),
         )?;
-        let table = SplitSumTable::load_or_build(
-            gpu,
-            variant.g2,
-            split_sum::DEFAULT_SIZE,
-            split_sum::DEFAULT_SAMPLES,
-        )?;
-        let tir = TirTable::for_variant(gpu, variant.tir)?;
-        let fgd = FgdImages::for_variant(gpu, variant.fgd, variant.g2)?;
-        let sampler = Sampler::new(&gpu.device, SamplerDesc::linear_clamp(), "eval tables")?;
         Ok(Self {
             gpu,
             variant,
+            inputs,
             kernel,
-            table,
-            tir,
-            fgd,
-            sampler,
         })
+    }
+
+    /// The CPU twin of the FGD lookups the kernel makes.
+    pub fn fgd_lookup(&self) -> FgdLookup<'_> {
+        self.inputs
+            .fgd_lookup(self.variant)
+            .expect("prepared by GpuEvaluator::new")
+    }
+
+    /// The CPU twin of the kernel's TIR term.
+    pub fn tir_lookup(&self) -> Box<dyn crate::model::Tir + '_> {
+        self.inputs.tir_lookup(self.variant)
     }
 
     /// Most lobes one evaluation can emit for this variant (the shader's `TM_MAX_LOBES`).
@@ -157,12 +146,8 @@ impl<'g> GpuEvaluator<'g> {
         }
         let device = &self.gpu.device;
         let stride = 2 + self.max_lobes();
-        let material = Buffer::with_data(
-            device,
-            BufferUsageFlags::UNIFORM_BUFFER,
-            &[MaterialGpu::new(layers)],
-            "eval material",
-        )?;
+        let material = material_buffer(device, layers, "eval material")?;
+        let shading = self.inputs.bind(self.variant, &material, "eval shading")?;
         let samples: Vec<f32> = cosines.iter().map(|&c| c as f32).collect();
         let samples = Buffer::with_data(
             device,
@@ -176,21 +161,13 @@ impl<'g> GpuEvaluator<'g> {
             "eval results",
         )?;
         let mut set = DescriptorSet::new(device, &self.kernel.set_layout, "eval")?;
-        set.write(0, Resource::Buffer(&material))
-            .write(1, Resource::Sampled(&self.table.view, &self.sampler))
-            .write(2, Resource::Buffer(&samples))
-            .write(3, Resource::Buffer(&results))
-            .write(
-                4,
-                Resource::Sampled(self.tir.view_for(self.variant.tir), &self.sampler),
-            )
-            .write(5, Resource::Sampled(&self.fgd.volume_view, &self.sampler))
-            .write(6, Resource::Sampled(&self.fgd.plane_view, &self.sampler));
+        set.write(0, Resource::Buffer(&samples))
+            .write(1, Resource::Buffer(&results));
         let count = cosines.len() as u32;
         submit_and_wait(device, "eval", |rec| {
-            self.kernel.record_dispatch(
+            self.kernel.record_dispatch_sets(
                 rec,
-                &set,
+                &[&shading, &set],
                 &Push {
                     sample_count: count,
                     stride: stride as u32,

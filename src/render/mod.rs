@@ -2,9 +2,8 @@
 
 pub mod eval;
 pub mod forward;
-pub mod frame;
 pub mod furnace;
-pub mod material;
+pub mod inputs;
 pub mod renderer;
 pub mod scene;
 pub mod sheet;

@@ -3,8 +3,6 @@
 //! Both draws sit in their own profiler scope; the shaded scope is the number lamina reports
 //! (GPU time of the shaded draw and its fragment-shader invocations).
 
-use std::collections::HashMap;
-
 use half::f16;
 
 use crate::error::Error;
@@ -12,20 +10,19 @@ use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
 use crate::model::LayerParams;
-use crate::shader::{Fgd, Tir, VariantKey, G2};
+use crate::shader::interface::{
+    material_buffer, FrameConstants, SCENE_BINDINGS, SCENE_SET, SHADING_SET,
+};
+use crate::shader::VariantKey;
 use crate::tables::environment::{EnvDesc, Environment};
-use crate::tables::fgd::FgdImages;
-use crate::tables::split_sum::{self, SplitSumTable};
-use crate::tables::tir::TirTable;
 use crate::vk::{
-    submit_and_wait, Access, BindingKind, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
+    submit_and_wait, Access, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
     DescriptorSetLayout, Format, GpuProfiler, Image, ImageDesc, ImageState, PipelineLayout,
     Resource, Sampler, SamplerDesc, ScopeTiming, Stages,
 };
 
 use super::forward::ForwardPass;
-use super::frame::FrameConstants;
-use super::material::MaterialGpu;
+use super::inputs::ShadingInputs;
 use super::scene::{uv_sphere, Camera, Mesh};
 use super::sky::SkyPass;
 
@@ -52,14 +49,10 @@ pub enum ShadedPhase {
 pub struct Renderer<'g> {
     gpu: &'g Gpu,
     pub environment: Environment,
-    split_sums: HashMap<G2, SplitSumTable>,
-    /// The TIR table, built (or loaded from the disk cache) when a LUT variant is prepared.
-    tir: Option<TirTable>,
-    /// Zeros bound in place of the TIR table for the other variants.
-    tir_unused: TirTable,
-    /// The FGD tables per (fgd, G2), built when a variant needing them is prepared.
-    fgd_tables: HashMap<(Fgd, G2), FgdImages>,
-    set_layout: DescriptorSetLayout,
+    /// Set 0: the stack and the tables of every variant prepared so far.
+    pub inputs: ShadingInputs<'g>,
+    /// Set 1: frame constants and the prefiltered environment.
+    scene_layout: DescriptorSetLayout,
     layout: PipelineLayout,
     sampler: Sampler,
     sky: SkyPass,
@@ -73,21 +66,20 @@ impl<'g> Renderer<'g> {
     pub fn new(gpu: &'g Gpu, equirect: &HdrImage, env: EnvDesc) -> Result<Self> {
         let device = &gpu.device;
         let environment = Environment::build(gpu, equirect, env)?;
-        let set_layout = DescriptorSetLayout::new(
+        let inputs = ShadingInputs::new(gpu)?;
+        let scene_layout = DescriptorSetLayout::new(
             device,
-            &[
-                BindingKind::UniformBuffer,
-                BindingKind::SampledImage,
-                BindingKind::SampledImage,
-                BindingKind::UniformBuffer,
-                BindingKind::SampledImage,
-                BindingKind::SampledImage,
-                BindingKind::SampledImage,
-            ],
+            &SCENE_BINDINGS.map(|b| b.kind),
             Stages::Graphics,
             "scene",
         )?;
-        let layout = PipelineLayout::new(device, &[&set_layout], 0, Stages::Graphics, "scene")?;
+        let layout = PipelineLayout::new(
+            device,
+            &[&inputs.layout.set_layout, &scene_layout],
+            0,
+            Stages::Graphics,
+            "scene",
+        )?;
         let sampler = Sampler::new(device, SamplerDesc::linear_clamp(), "scene")?;
         let sky = SkyPass::new(gpu, &layout, COLOR_FORMAT)?;
         let mesh = uv_sphere(64, 128);
@@ -106,11 +98,8 @@ impl<'g> Renderer<'g> {
         Ok(Self {
             gpu,
             environment,
-            split_sums: HashMap::new(),
-            tir: None,
-            tir_unused: TirTable::for_variant(gpu, Tir::None)?,
-            fgd_tables: HashMap::new(),
-            set_layout,
+            inputs,
+            scene_layout,
             layout,
             sampler,
             sky,
@@ -148,23 +137,7 @@ impl<'g> Renderer<'g> {
 
     /// Compiles and builds the pipeline of `variant` (and the tables it samples).
     pub fn prepare(&mut self, variant: VariantKey) -> Result<ForwardPass> {
-        if !self.split_sums.contains_key(&variant.g2) {
-            let table = SplitSumTable::load_or_build(
-                self.gpu,
-                variant.g2,
-                split_sum::DEFAULT_SIZE,
-                split_sum::DEFAULT_SAMPLES,
-            )?;
-            self.split_sums.insert(variant.g2, table);
-        }
-        if matches!(variant.tir, Tir::Lut32 | Tir::Lut16) && self.tir.is_none() {
-            self.tir = Some(TirTable::for_variant(self.gpu, variant.tir)?);
-        }
-        let key = (variant.fgd, variant.g2);
-        if !self.fgd_tables.contains_key(&key) {
-            let images = FgdImages::for_variant(self.gpu, variant.fgd, variant.g2)?;
-            self.fgd_tables.insert(key, images);
-        }
+        self.inputs.prepare(variant)?;
         ForwardPass::new(self.gpu, &self.layout, COLOR_FORMAT, variant)
     }
 
@@ -200,14 +173,6 @@ impl<'g> Renderer<'g> {
             )));
         }
         let device = &self.gpu.device;
-        let table = &self.split_sums[&pass.variant.g2];
-        let tir = self.tir.as_ref().unwrap_or(&self.tir_unused);
-        let fgd = self
-            .fgd_tables
-            .get(&(pass.variant.fgd, pass.variant.g2))
-            .ok_or_else(|| {
-                Error::Unsupported(format!("variant {} was not prepared", pass.variant))
-            })?;
         let view_proj = self.camera.view_proj(width as f32 / height as f32);
         let constants = FrameConstants {
             view_proj: view_proj.to_cols_array_2d(),
@@ -221,23 +186,12 @@ impl<'g> Renderer<'g> {
             &[constants],
             "frame constants",
         )?;
-        let material = Buffer::with_data(
-            device,
-            BufferUsageFlags::UNIFORM_BUFFER,
-            &[MaterialGpu::new(layers)],
-            "material",
-        )?;
-        let mut set = DescriptorSet::new(device, &self.set_layout, "scene")?;
-        set.write(0, Resource::Buffer(&uniforms))
-            .write(1, Resource::Sampled(&self.environment.view, &self.sampler))
-            .write(2, Resource::Sampled(&table.view, &self.sampler))
-            .write(3, Resource::Buffer(&material))
-            .write(
-                4,
-                Resource::Sampled(tir.view_for(pass.variant.tir), &self.sampler),
-            )
-            .write(5, Resource::Sampled(&fgd.volume_view, &self.sampler))
-            .write(6, Resource::Sampled(&fgd.plane_view, &self.sampler));
+        let material = material_buffer(device, layers, "material")?;
+        let shading = self.inputs.bind(pass.variant, &material, "shading")?;
+        let mut scene = DescriptorSet::new(device, &self.scene_layout, "scene")?;
+        scene
+            .write(0, Resource::Buffer(&uniforms))
+            .write(1, Resource::Sampled(&self.environment.view, &self.sampler));
 
         let target = Image::new(
             device,
@@ -260,7 +214,8 @@ impl<'g> Renderer<'g> {
                 ImageState::ColorAttachment,
             );
             rec.bind_pipeline(&self.sky.pipeline);
-            rec.bind_set(&self.sky.pipeline, &self.layout, 0, &set);
+            rec.bind_set(&self.sky.pipeline, &self.layout, SHADING_SET, &shading);
+            rec.bind_set(&self.sky.pipeline, &self.layout, SCENE_SET, &scene);
             let scope = profiler
                 .begin(rec, "sky")
                 .expect("first scope of a fresh profiler");
@@ -274,7 +229,8 @@ impl<'g> Renderer<'g> {
         observe(ShadedPhase::Before);
         submit_and_wait(device, "shaded", |rec| {
             rec.bind_pipeline(&pass.pipeline);
-            rec.bind_set(&pass.pipeline, &self.layout, 0, &set);
+            rec.bind_set(&pass.pipeline, &self.layout, SHADING_SET, &shading);
+            rec.bind_set(&pass.pipeline, &self.layout, SCENE_SET, &scene);
             let scope = profiler
                 .begin(rec, "shaded")
                 .expect("the sky scope is closed");

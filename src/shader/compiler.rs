@@ -47,11 +47,11 @@ fn fnv1a(h: u64, bytes: impl IntoIterator<Item = u8>) -> u64 {
 
 /// The files `entry` compiles from: itself and every include it reaches, by resolved path,
 /// sorted.
-fn sources_of(entry: &str) -> Vec<(String, &'static str)> {
-    let mut seen: Vec<(String, &'static str)> = Vec::new();
+fn sources_of(entry: &str) -> Vec<(String, std::borrow::Cow<'static, str>)> {
+    let mut seen: Vec<(String, std::borrow::Cow<'static, str>)> = Vec::new();
     let mut pending = vec![entry.to_owned()];
     while let Some(path) = pending.pop() {
-        let Some(text) = source(&path) else { continue };
+        let Some(text) = text_of(&path) else { continue };
         if seen.iter().any(|(p, _)| *p == path) {
             continue;
         }
@@ -124,6 +124,53 @@ fn normalise(path: &Path) -> Option<String> {
     Some(out.to_string_lossy().replace('\\', "/"))
 }
 
+/// The files the compiler writes from Rust tables, under `glsl/include/generated/`: the codes
+/// of every variant axis value and the model's constants, so GLSL never copies them by hand.
+const GENERATED_CODES: &str = "include/generated/codes.glsl";
+
+fn codes_glsl() -> String {
+    use super::variant::{Axis, Fgd, Model, Ndf, Tir, G2};
+    fn axis<A: Axis>(out: &mut String) {
+        for &(spelling, value) in A::VALUES {
+            let name = format!("{}_{}", A::NAME, spelling)
+                .to_uppercase()
+                .replace('-', "_");
+            out.push_str(&format!("#define {name} {}u\n", value.code()));
+        }
+    }
+    let mut out = String::from(
+        "// Written by src/shader/compiler.rs from the Rust value tables (shader::variant) and\n\
+         // the model's constants (model, model::hg, model::tir). Do not copy these by hand.\n\
+         #ifndef LAMINA_GENERATED_CODES\n#define LAMINA_GENERATED_CODES\n",
+    );
+    axis::<Model>(&mut out);
+    axis::<Tir>(&mut out);
+    axis::<Fgd>(&mut out);
+    axis::<G2>(&mut out);
+    axis::<Ndf>(&mut out);
+    for (name, value) in [
+        ("TM_INDEX_MATCHED", crate::model::INDEX_MATCHED),
+        ("TM_REFLECTS_NOTHING", crate::model::REFLECTS_NOTHING),
+        ("HG_RATIO_FLOOR", crate::model::hg::RATIO_FLOOR),
+        (
+            "TIR_CONSTANT_FRACTION",
+            crate::model::tir::CONSTANT_FRACTION,
+        ),
+    ] {
+        out.push_str(&format!("#define {name} {value:e}\n"));
+    }
+    out.push_str("#endif\n");
+    out
+}
+
+/// The text of a file under `glsl/`: embedded, or generated.
+fn text_of(path: &str) -> Option<std::borrow::Cow<'static, str>> {
+    if path == GENERATED_CODES {
+        return Some(codes_glsl().into());
+    }
+    source(path).map(std::borrow::Cow::Borrowed)
+}
+
 fn resolve_include(requested: &str, requester: &str) -> Result<shaderc::ResolvedInclude, String> {
     let requester_dir = Path::new(requester).parent().unwrap_or(Path::new(""));
     let candidates = [
@@ -131,10 +178,10 @@ fn resolve_include(requested: &str, requester: &str) -> Result<shaderc::Resolved
         normalise(&Path::new("include").join(requested)),
     ];
     for name in candidates.into_iter().flatten() {
-        if let Some(content) = source(&name) {
+        if let Some(content) = text_of(&name) {
             return Ok(shaderc::ResolvedInclude {
                 resolved_name: name,
-                content: content.to_owned(),
+                content: content.into_owned(),
             });
         }
     }
@@ -235,6 +282,29 @@ mod tests {
             entry_hash("tir_table.comp.glsl"),
             entry_hash("split_sum.comp.glsl")
         );
+    }
+
+    #[test]
+    fn generated_codes_follow_the_value_tables() {
+        let text = codes_glsl();
+        for line in [
+            "#define MODEL_TM6 2u",
+            "#define TIR_LUT16 4u",
+            "#define FGD_RESAMPLED4D 3u",
+            "#define G2_HEIGHT_CORRELATED 0u",
+            "#define NDF_KARIS 1u",
+            "#define TM_INDEX_MATCHED 1e-5",
+        ] {
+            assert!(
+                text.lines().any(|l| l == line),
+                "{line} missing from:\n{text}"
+            );
+        }
+        let r = resolve_include("../generated/codes.glsl", "include/shared/variant.glsl").unwrap();
+        assert_eq!(r.resolved_name, GENERATED_CODES);
+        assert!(sources_of("forward.frag.glsl")
+            .iter()
+            .any(|(p, _)| p == GENERATED_CODES));
     }
 
     #[test]

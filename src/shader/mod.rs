@@ -1,6 +1,7 @@
 //! Shader compilation and the variant key.
 
 mod compiler;
+pub mod interface;
 pub mod variant;
 
 pub use compiler::{entry_hash, entry_points, source, ShaderCompiler, ShaderError, HOST_DEFINES};

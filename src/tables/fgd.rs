@@ -19,14 +19,16 @@ use std::path::Path;
 use crate::error::{Error, Result};
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::{fresnel, microfacet};
+use crate::shader::interface::{material_buffer, InputViews, ShadingLayout};
 use crate::shader::{Fgd, VariantKey, G2};
 use crate::tables::belcour::Basis;
 use crate::tables::cache;
 use crate::tables::split_sum::SplitSumTable;
+use crate::tables::tir::TirTable;
 use crate::tables::{filter_axis, Texels};
 use crate::vk::{
     submit_and_wait, upload_image, Access, BindingKind, Buffer, BufferDesc, BufferUsageFlags,
-    DescriptorSet, Format, Image, ImageDesc, ImageState, ImageView, Resource, Sampler, SamplerDesc,
+    DescriptorSet, Format, Image, ImageDesc, ImageState, ImageView, Resource,
 };
 
 /// Texels per axis of every FGD grid (the reference's 64; `LAMINA_FGD_SIZE` in GLSL).
@@ -726,11 +728,14 @@ struct ProbePush {
     count: u32,
 }
 
-/// Samples FGD at given (μ, α, η, κ) points with the shaders' own code (`fgd_probe.comp.glsl`).
+/// Samples FGD at given (μ, α, η, κ) points with the shaders' own code (`fgd_probe.comp.glsl`),
+/// through the shading set as every pass that shades binds it (an empty stack, no TIR table).
 pub struct FgdProbe<'g> {
     gpu: &'g Gpu,
+    layout: ShadingLayout,
     kernel: ComputeKernel,
-    sampler: Sampler,
+    material: Buffer,
+    tir_unused: TirTable,
 }
 
 impl<'g> FgdProbe<'g> {
@@ -739,24 +744,22 @@ impl<'g> FgdProbe<'g> {
             fgd,
             ..VariantKey::default()
         };
-        let kernel = ComputeKernel::new(
+        let layout = ShadingLayout::new(&gpu.device)?;
+        let kernel = ComputeKernel::with_sets(
             gpu,
             "fgd_probe.comp.glsl",
-            &[
-                BindingKind::SampledImage,
-                BindingKind::SampledImage,
-                BindingKind::SampledImage,
-                BindingKind::StorageBuffer,
-                BindingKind::StorageBuffer,
-            ],
+            &[],
+            &[&layout.set_layout],
+            &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
             std::mem::size_of::<ProbePush>() as u32,
             &variant.spec(),
         )?;
-        let sampler = Sampler::new(&gpu.device, SamplerDesc::linear_clamp(), "fgd probe")?;
         Ok(Self {
             gpu,
+            layout,
             kernel,
-            sampler,
+            material: material_buffer(&gpu.device, &[], "fgd probe material")?,
+            tir_unused: TirTable::for_variant(gpu, crate::shader::Tir::None)?,
         })
     }
 
@@ -782,17 +785,22 @@ impl<'g> FgdProbe<'g> {
             BufferDesc::readback(points.len() as u64 * 4),
             "fgd probe values",
         )?;
+        let views = InputViews {
+            material: &self.material,
+            split_sum: &split_sum.view,
+            tir: self.tir_unused.view_for(crate::shader::Tir::None),
+            fgd_volume: &images.volume_view,
+            fgd_plane: &images.plane_view,
+        };
+        let shading = self.layout.bind(device, &views, "fgd probe shading")?;
         let mut set = DescriptorSet::new(device, &self.kernel.set_layout, "fgd probe")?;
-        set.write(0, Resource::Sampled(&split_sum.view, &self.sampler))
-            .write(1, Resource::Sampled(&images.volume_view, &self.sampler))
-            .write(2, Resource::Sampled(&images.plane_view, &self.sampler))
-            .write(3, Resource::Buffer(&input))
-            .write(4, Resource::Buffer(&output));
+        set.write(0, Resource::Buffer(&input))
+            .write(1, Resource::Buffer(&output));
         let count = points.len() as u32;
         submit_and_wait(device, "fgd probe", |rec| {
-            self.kernel.record_dispatch(
+            self.kernel.record_dispatch_sets(
                 rec,
-                &set,
+                &[&shading, &set],
                 &ProbePush { count },
                 [count.div_ceil(64), 1, 1],
             );

@@ -38,6 +38,8 @@ impl BindingKind {
 pub enum Stages {
     Compute,
     Graphics,
+    /// Graphics and compute: a set layout shared by both kinds of pipeline (the shading inputs).
+    All,
 }
 
 impl Stages {
@@ -45,6 +47,11 @@ impl Stages {
         match self {
             Self::Compute => vk::ShaderStageFlags::COMPUTE,
             Self::Graphics => vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+            Self::All => {
+                vk::ShaderStageFlags::VERTEX
+                    | vk::ShaderStageFlags::FRAGMENT
+                    | vk::ShaderStageFlags::COMPUTE
+            }
         }
     }
 }

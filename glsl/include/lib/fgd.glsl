@@ -1,20 +1,16 @@
-// Directional albedo FGD(μ, α, η, κ) of a rough interface, from the table the FGD_MODE
-// constant selects. The including entry point declares the tables:
-//   uniform sampler2D split_sum;     // karis: (A, B) at (μ, √α), see split_sum.comp.glsl
-//   uniform sampler3D fgd_table;     // 4d: 64×64×4096, resampled4d: 64×64×2048,
-//                                    // belcour: the 64³ dielectric table over η < 1
-//   uniform sampler2D fgd_belcour;   // belcour: the folded 4-channel table
+// Directional albedo FGD(μ, α, η, κ), from the table the FGD_MODE constant selects, bound by
+// the shading set (bindings/shading.glsl):
+//   split_sum     karis: (A, B) at (μ, √α), see split_sum.comp.glsl
+//   fgd_table     4d: 64×64×4096, resampled4d: 64×64×2048, belcour: the 64³ dielectric table
+//                 over η < 1
+//   fgd_belcour   belcour: the folded 4-channel table
 // Mirrors the providers of src/tables/fgd.rs.
 #ifndef LAMINA_LIB_FGD
 #define LAMINA_LIB_FGD
 
 #include "fresnel.glsl"
 #include "../shared/variant.glsl"
-
-#define FGD_KARIS 0u
-#define FGD_BELCOUR 1u
-#define FGD_4D 2u
-#define FGD_RESAMPLED 3u
+#include "../bindings/shading.glsl"
 
 // Texels per axis of the vertex-centred grids (the host builds them at this size).
 const float FGD_N = float(LAMINA_FGD_SIZE);
@@ -39,7 +35,7 @@ float fgd_stacked(float mu, float alpha, float eta, float kappa) {
     float fk = clamp(kappa / FGD_KAPPA_MAX, 0.0, 1.0) * (FGD_N - 1.0);
     float slices = FGD_N;
     float g = fk;
-    if (FGD_MODE == FGD_RESAMPLED) {
+    if (FGD_MODE == FGD_RESAMPLED4D) {
         slices = 0.5 * FGD_N;
         g = clamp(0.5 * (fk - 0.5), 0.0, slices - 1.0);
     }
@@ -69,7 +65,7 @@ float fgd_belcour_channel(float mu, float alpha, float eta, float kappa) {
 float fgd_channel(float mu, float alpha, float eta, float kappa) {
     if (FGD_MODE == FGD_BELCOUR) {
         return fgd_belcour_channel(mu, alpha, eta, kappa);
-    } else if (FGD_MODE == FGD_4D || FGD_MODE == FGD_RESAMPLED) {
+    } else if (FGD_MODE == FGD_4D || FGD_MODE == FGD_RESAMPLED4D) {
         return fgd_stacked(mu, alpha, eta, kappa);
     }
     // Karis 2013 split sum: F0·A + B with F0 from the complex IOR (exact at normal incidence,

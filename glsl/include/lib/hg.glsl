@@ -5,6 +5,7 @@
 #define LAMINA_LIB_HG
 
 #include "precision.glsl"
+#include "../generated/codes.glsl"
 
 // GGX α → HG g (the paper's Eq. 15), exact inverse of hg_alpha_of_g on α ∈ [0, 1].
 float hg_g_of_alpha(float alpha) {
@@ -23,10 +24,10 @@ float hg_refract(float g, float eta) {
     return min(sqrt(max(1.0 - (1.0 - g * g) * pow(eta, 0.75), 0.0)), 1.0);
 }
 
-// num / den, or 0 where |den| ≤ 1e-7: ratios of g's, undefined where a lobe has collapsed
-// (src/model/hg.rs's safe_ratio says why not > 0: f32 underflows long before f64).
+// num / den, or 0 where |den| ≤ HG_RATIO_FLOOR: ratios of g's, undefined where a lobe has
+// collapsed (src/model/hg.rs's safe_ratio says why not > 0: f32 underflows long before f64).
 float hg_safe_ratio(float num, float den) {
-    return abs(den) > 1e-7 ? num / den : 0.0;
+    return abs(den) > HG_RATIO_FLOOR ? num / den : 0.0;
 }
 
 // Fraction of an HG phase function in the backward hemisphere (polynomial fit, §3.5).

@@ -1,21 +1,17 @@
-// Total-internal-reflection correction (ALGORITHMS.md §4.5, §9), by the TIR_MODE constant.
-// The including entry point declares the table:
-//   uniform sampler3D tir_table;   // n³, vertex-centred (μ, α, η), see tir_table.comp.glsl
-// Mirrors the Tir providers of src/model and src/tables/tir.rs.
+// Total-internal-reflection correction (ALGORITHMS.md §4.5, §9), by the TIR_MODE constant, from
+// the shading set's tir_table (bindings/shading.glsl; n³, vertex-centred (μ, α, η), see
+// tir_table.comp.glsl) in the LUT modes. Mirrors the Tir providers of src/model and
+// src/tables/tir.rs.
 #ifndef LAMINA_LIB_TIR
 #define LAMINA_LIB_TIR
 
 #include "math.glsl"
 #include "fresnel.glsl"
+#include "../shared/variant.glsl"
+#include "../bindings/shading.glsl"
 
-#define TIR_NONE 0u
-#define TIR_CONSTANT 1u
-#define TIR_ANALYTIC 2u
-#define TIR_LUT32 3u
-#define TIR_LUT16 4u
-
-// `tir=constant`: the talk's dummy constant, standing in for the fetch to measure its cost.
-const float TIR_CONSTANT_FRACTION = 0.1;
+// `tir=constant` returns TIR_CONSTANT_FRACTION (generated/codes.glsl, from
+// src/model/tir.rs): the talk's dummy constant, standing in for the fetch to measure its cost.
 
 // The talk's naive analytic estimator (ALGORITHMS.md §9.2), kept as the port wrote it (the
 // Frostbite dominant-direction fit unclamped: it only overshoots, and the estimate is only

@@ -27,7 +27,7 @@ struct Tm2Factors {
 
 // Pass 1: the factors of every layer for view cosine `mu`, following the mean direction down
 // the stack by Snell's law (§4.1).
-void tm2_factors(MaterialGpu material, float mu, inout Tm2Factors comps[MAX_LAYERS], out uint count) {
+void tm2_factors(float mu, inout Tm2Factors comps[MAX_LAYERS], out uint count) {
     count = min(material.info.x, MAX_LAYERS);
     float eta_above = IOR_AIR;
     float cos_i = mu;
@@ -57,7 +57,7 @@ void tm2_factors(MaterialGpu material, float mu, inout Tm2Factors comps[MAX_LAYE
         }
         float eta_layer = tm_mean(layer.ior.rgb);
         c.eta = eta_layer / eta_above;
-        if (abs(c.eta - 1.0) < 1e-5) {
+        if (abs(c.eta - 1.0) < TM_INDEX_MATCHED) {
             c.skip = true;
             c.r = real3(0.0);
             c.rp = real3(0.0);
@@ -75,7 +75,7 @@ void tm2_factors(MaterialGpu material, float mu, inout Tm2Factors comps[MAX_LAYE
         float s_up = abs(1.0 - c.eta * cos_t / max(cos_i, 1e-7));
         c.gt = hg_g_of_alpha(0.5 * s_down * c.alpha);
         c.gtp = hg_g_of_alpha(0.5 * s_up * c.alpha);
-        float r = abs(c.eta - 1.0) < 1e-3 ? 0.0 : fgd_dielectric(cos_i, c.alpha, c.eta);
+        float r = abs(c.eta - 1.0) < TM_REFLECTS_NOTHING ? 0.0 : fgd_dielectric(cos_i, c.alpha, c.eta);
         c.r = real3(r);
         c.rp = real3(r);
         c.t = real3(1.0 - r);
@@ -89,10 +89,10 @@ void tm2_factors(MaterialGpu material, float mu, inout Tm2Factors comps[MAX_LAYE
 // Pass 2: compose the components top to bottom by the adding equations and emit one lobe per
 // layer through tm_emit_lobe (§4.2–4.6). Returns the lobe count (= layers); `reflectance` and
 // `transmittance` get the stack totals.
-uint tm2_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3 transmittance) {
+uint tm2_evaluate(float mu, out vec3 reflectance, out vec3 transmittance) {
     Tm2Factors comps[MAX_LAYERS];
     uint count;
-    tm2_factors(material, mu, comps, count);
+    tm2_factors(mu, comps, count);
 
     TmSlab e = tm_slab_empty();
     TmSlab1 g = tm_slab1_empty();

@@ -294,7 +294,7 @@ void tm6_medium_factors(LayerGpu layer, float mu, out vec3 transmission, out vec
 // when its depth is 0). Each step adds its factors below the energy slab `e` and the asymmetry
 // slab `g`, which hold the three reflectances as they grow, and emits the lobes the request
 // flags allow (§5.5–5.7) through tm_emit_lobe. Returns the lobe count.
-uint tm6_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3 transmittance) {
+uint tm6_evaluate(float mu, out vec3 reflectance, out vec3 transmittance) {
     uint layers = min(material.info.x, MAX_LAYERS);
     Tm6Slab e = tm6_slab_empty();
     Tm6Slab g = tm6_slab_empty();
@@ -339,7 +339,7 @@ uint tm6_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3
             float eta_layer = tm_mean(layer.ior.rgb);
             float eta = eta_layer / eta_above;
             float cos_below = cos_i;
-            bool refracts = abs(eta - 1.0) >= 1e-5;
+            bool refracts = abs(eta - 1.0) >= TM_INDEX_MATCHED;
             if (refracts) {
                 cos_below = tm_refracted_cos(cos_i, eta);
             }
@@ -370,7 +370,7 @@ uint tm6_evaluate(MaterialGpu material, float mu, out vec3 reflectance, out vec3
                 float g_st0j_rt = hg_refract(g_st0j_r, eta) * g_tp;
                 float gst = hg_safe_ratio(g_st0j, g_st0i);
                 float gstp = hg_safe_ratio(g_st0j_rt, g_st0j_r);
-                float r0 = abs(eta - 1.0) < 1e-3 ? 0.0 : fgd_dielectric(cos_i, alpha, eta);
+                float r0 = abs(eta - 1.0) < TM_REFLECTS_NOTHING ? 0.0 : fgd_dielectric(cos_i, alpha, eta);
                 vec3 r = vec3(r0), t = vec3(1.0 - r0), rp = vec3(r0), tp = vec3(1.0 - r0);
                 vec3 rs = r, ts = t, rsp = rp, tsp = tp;
                 // Total internal reflection moves energy from transmission to reflection (§4.5).

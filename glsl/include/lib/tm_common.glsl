@@ -1,5 +1,7 @@
 // Pieces shared by the 2-flux and 6-flux models: lobes, the adding equations per RGB channel,
-// and the Snell chain of the mean direction (ALGORITHMS.md §2, §4.2).
+// and the Snell chain of the mean direction (ALGORITHMS.md §2, §4.2). The models read the stack
+// and the tables from the shading set (bindings/shading.glsl), which every entry point that
+// shades binds as set 0.
 #ifndef LAMINA_LIB_TM_COMMON
 #define LAMINA_LIB_TM_COMMON
 
@@ -8,7 +10,7 @@
 #include "fgd.glsl"
 #include "tir.glsl"
 #include "../shared/variant.glsl"
-#include "../shared/material.glsl"
+#include "../bindings/shading.glsl"
 
 // The medium above the stack: vacuum, as src/model/mod.rs's IOR_AIR.
 const float IOR_AIR = 1.0;

@@ -10,16 +10,8 @@ layout(constant_id = 3) const uint FGD_MODE = 0;
 layout(constant_id = 4) const uint G2_MODE = 0;
 layout(constant_id = 5) const uint NDF_MODE = 0;
 
-#define MODEL_GGX 0u
-#define MODEL_TM2 1u
-#define MODEL_TM6 2u
-
-#define G2_HEIGHT_CORRELATED 0u
-#define G2_SMITH 1u
-#define G2_SCHLICK 2u
-#define G2_EARL 3u
-
-#define NDF_GGX 0u
-#define NDF_KARIS 1u
+// The codes of every axis value (MODEL_TM2, TIR_LUT32, FGD_RESAMPLED4D, G2_EARL, …), written
+// from the Rust value tables by src/shader/compiler.rs.
+#include "../generated/codes.glsl"
 
 #endif

@@ -1,0 +1,18 @@
+// Set 0 of every entry point that evaluates the model: the layer stack and the tables the
+// variant samples. Mirrors SHADING_BINDINGS in src/render/inputs.rs (tests/reflection.rs
+// compares the compiled SPIR-V with it). The material is a storage buffer: lavapipe inlines
+// uniform-buffer values into the shader and recompiles it per material (inputs.rs).
+#ifndef LAMINA_BINDINGS_SHADING
+#define LAMINA_BINDINGS_SHADING
+
+#include "../shared/material.glsl"
+
+layout(set = 0, binding = 0, std430) readonly buffer Material {
+    MaterialGpu material;
+};
+layout(set = 0, binding = 1) uniform sampler2D split_sum;   // (A, B) at (μ, √α)
+layout(set = 0, binding = 2) uniform sampler3D tir_table;   // (μ, α, η), vertex-centred
+layout(set = 0, binding = 3) uniform sampler3D fgd_table;   // 4d, resampled4d, belcour's η < 1
+layout(set = 0, binding = 4) uniform sampler2D fgd_belcour; // belcour's folded integrals
+
+#endif

@@ -1,0 +1,202 @@
+//! The host side of the GLSL interface: the structs mirrored in `glsl/include/shared/` (size
+//! and offsets asserted here, and compared with the compiled blocks by tests/reflection.rs) and
+//! the descriptor sets declared in `glsl/include/bindings/`, with the layout of the shading set
+//! that every entry point evaluating the model binds as set 0.
+
+use std::mem::{offset_of, size_of};
+use std::sync::Arc;
+
+use crate::model::LayerParams;
+use crate::vk::{
+    BindingKind, Buffer, BufferUsageFlags, DescriptorSet, DescriptorSetLayout, Device, ImageView,
+    Resource, Sampler, SamplerDesc, Stages, VkResult,
+};
+
+use super::variant::MAX_LAYERS_LIMIT;
+
+/// Per-frame constants (`shared/frame.glsl`, std140).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct FrameConstants {
+    pub view_proj: [[f32; 4]; 4],
+    pub inv_view_proj: [[f32; 4]; 4],
+    /// xyz: world-space eye.
+    pub camera_pos: [f32; 4],
+    /// x: mip count of the prefiltered environment.
+    pub params: [f32; 4],
+}
+
+const _: () = assert!(size_of::<FrameConstants>() == 160);
+const _: () = assert!(offset_of!(FrameConstants, inv_view_proj) == 64);
+const _: () = assert!(offset_of!(FrameConstants, camera_pos) == 128);
+const _: () = assert!(offset_of!(FrameConstants, params) == 144);
+
+/// One layer (`shared/material.glsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct LayerGpu {
+    pub ior: [f32; 4],
+    pub kappa: [f32; 4],
+    pub sigma_s: [f32; 4],
+    pub sigma_a: [f32; 4],
+    /// x: GGX α of the top interface, y: medium depth, z: HG g.
+    pub params: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct MaterialGpu {
+    /// x: layer count.
+    pub info: [u32; 4],
+    pub layers: [LayerGpu; MAX_LAYERS_LIMIT as usize],
+}
+
+const _: () = assert!(size_of::<LayerGpu>() == 80);
+const _: () = assert!(offset_of!(LayerGpu, params) == 64);
+const _: () = assert!(size_of::<MaterialGpu>() == 16 + 80 * MAX_LAYERS_LIMIT as usize);
+const _: () = assert!(offset_of!(MaterialGpu, layers) == 16);
+
+impl MaterialGpu {
+    /// Packs `layers` (top first); at most [`MAX_LAYERS_LIMIT`] layers, which the material
+    /// module's validation guarantees (a caller bug otherwise).
+    pub fn new(layers: &[LayerParams]) -> Self {
+        assert!(
+            layers.len() <= MAX_LAYERS_LIMIT as usize,
+            "stack exceeds the buffer"
+        );
+        let rgb = |v: [f64; 3]| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0];
+        let mut gpu = Self {
+            info: [layers.len() as u32, 0, 0, 0],
+            layers: [LayerGpu::default(); MAX_LAYERS_LIMIT as usize],
+        };
+        for (dst, src) in gpu.layers.iter_mut().zip(layers) {
+            *dst = LayerGpu {
+                ior: rgb(src.ior),
+                kappa: rgb(src.kappa),
+                sigma_s: rgb(src.sigma_s),
+                sigma_a: rgb(src.sigma_a),
+                params: [src.roughness as f32, src.depth as f32, src.g as f32, 0.0],
+            };
+        }
+        gpu
+    }
+}
+
+/// One binding of a descriptor set: its number, kind and GLSL name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Binding {
+    pub binding: u32,
+    pub kind: BindingKind,
+    pub name: &'static str,
+}
+
+/// The descriptor set index of the shading inputs in every pipeline that shades.
+pub const SHADING_SET: u32 = 0;
+
+/// The shading set's bindings, as `glsl/include/bindings/shading.glsl` declares them. The
+/// material is a storage buffer, not a uniform buffer: lavapipe inlines uniform-buffer values
+/// that feed loop bounds into the shader and recompiles it at draw time (Mesa's
+/// `lvp_inline_uniforms`), which turned the generic pass into a per-material one behind the
+/// benchmarks' back and took minutes of LLVM time for some variants. Storage-buffer loads are
+/// never inlined.
+pub const SHADING_BINDINGS: [Binding; 5] = [
+    Binding {
+        binding: 0,
+        kind: BindingKind::StorageBuffer,
+        name: "Material",
+    },
+    Binding {
+        binding: 1,
+        kind: BindingKind::SampledImage,
+        name: "split_sum",
+    },
+    Binding {
+        binding: 2,
+        kind: BindingKind::SampledImage,
+        name: "tir_table",
+    },
+    Binding {
+        binding: 3,
+        kind: BindingKind::SampledImage,
+        name: "fgd_table",
+    },
+    Binding {
+        binding: 4,
+        kind: BindingKind::SampledImage,
+        name: "fgd_belcour",
+    },
+];
+
+/// The views and buffer one shading set binds.
+pub struct InputViews<'a> {
+    pub material: &'a Buffer,
+    pub split_sum: &'a ImageView,
+    pub tir: &'a ImageView,
+    pub fgd_volume: &'a ImageView,
+    pub fgd_plane: &'a ImageView,
+}
+
+/// The shading set's layout (what a pipeline that shades lists as set 0) and the sampler its
+/// tables are read with.
+pub struct ShadingLayout {
+    pub set_layout: DescriptorSetLayout,
+    sampler: Sampler,
+}
+
+impl ShadingLayout {
+    pub fn new(device: &Arc<Device>) -> VkResult<Self> {
+        let kinds = SHADING_BINDINGS.map(|b| b.kind);
+        Ok(Self {
+            set_layout: DescriptorSetLayout::new(device, &kinds, Stages::All, "shading inputs")?,
+            sampler: Sampler::new(device, SamplerDesc::linear_clamp(), "shading tables")?,
+        })
+    }
+
+    /// A shading set binding `views`.
+    pub fn bind(
+        &self,
+        device: &Arc<Device>,
+        views: &InputViews<'_>,
+        name: &str,
+    ) -> VkResult<DescriptorSet> {
+        let mut set = DescriptorSet::new(device, &self.set_layout, name)?;
+        let sampled = |view| Resource::Sampled(view, &self.sampler);
+        set.write(0, Resource::Buffer(views.material))
+            .write(1, sampled(views.split_sum))
+            .write(2, sampled(views.tir))
+            .write(3, sampled(views.fgd_volume))
+            .write(4, sampled(views.fgd_plane));
+        Ok(set)
+    }
+}
+
+/// A layer stack in the storage buffer the shading set binds.
+pub fn material_buffer(
+    device: &Arc<Device>,
+    layers: &[LayerParams],
+    name: &str,
+) -> VkResult<Buffer> {
+    Buffer::with_data(
+        device,
+        BufferUsageFlags::STORAGE_BUFFER,
+        &[MaterialGpu::new(layers)],
+        name,
+    )
+}
+
+/// The descriptor set index of the scene's own inputs (the forward and sky passes).
+pub const SCENE_SET: u32 = 1;
+
+/// The scene set's bindings, as `glsl/include/bindings/scene.glsl` declares them.
+pub const SCENE_BINDINGS: [Binding; 2] = [
+    Binding {
+        binding: 0,
+        kind: BindingKind::UniformBuffer,
+        name: "Frame",
+    },
+    Binding {
+        binding: 1,
+        kind: BindingKind::SampledImage,
+        name: "prefiltered",
+    },
+];
