@@ -11,7 +11,6 @@
 //! - [`output`] — the JSON and tables commands print;
 //! - [`profile`] — the bench runner, statistics, result files;
 //! - [`viewer`] — the interactive window (winit + egui).
-#![warn(unsafe_op_in_unsafe_fn)]
 
 pub mod error;
 pub mod gpu;

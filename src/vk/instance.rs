@@ -138,6 +138,7 @@ impl Instance {
                     .into(),
             ));
         }
+        // SAFETY: plain enumeration through a loaded entry; no layer name is passed.
         let extensions = unsafe { entry.enumerate_instance_extension_properties(None) }
             .check("vkEnumerateInstanceExtensionProperties")?;
         let has_debug_utils = extensions
