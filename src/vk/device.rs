@@ -323,6 +323,18 @@ impl Device {
         self.instance.messages().problems()
     }
 
+    /// The debug names of the allocations alive now: what would leak if the device went away
+    /// (every owner releases its allocation in `Drop`; the device reports any left at exit).
+    pub fn live_allocations(&self) -> Vec<String> {
+        let allocator = self.allocator.lock().expect("allocator lock poisoned");
+        allocator
+            .generate_report()
+            .allocations
+            .into_iter()
+            .map(|a| a.name)
+            .collect()
+    }
+
     pub fn supports_fp16(&self) -> bool {
         self.report.shader_float16
     }
@@ -356,6 +368,14 @@ impl Drop for Device {
             // Children skipped their release too; leak the lot rather than destroy a device
             // with live children.
             return;
+        }
+        let leaked = self.live_allocations();
+        if !leaked.is_empty() {
+            eprintln!(
+                "warning: {} GPU allocation(s) were never freed: {}",
+                leaked.len(),
+                leaked.join(", ")
+            );
         }
         // SAFETY: every child object holds an `Arc<Device>`, so none is alive; waiting idle makes
         // sure no submitted work still references memory owned by the allocator.
