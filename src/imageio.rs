@@ -106,6 +106,13 @@ pub fn write_atomically(
     result.map_err(output_error)
 }
 
+/// Writes `contents` (text or bytes) to `path` through [`write_atomically`].
+pub fn write_file_atomically(path: &Path, contents: impl AsRef<[u8]>) -> Result<()> {
+    write_atomically(path, |temp| {
+        std::fs::write(temp, contents.as_ref()).map_err(|e| e.to_string())
+    })
+}
+
 /// Writes RGBA half-float pixels (rows top to bottom) as an OpenEXR file.
 pub fn write_exr_rgba16f(
     path: &Path,

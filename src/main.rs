@@ -703,16 +703,12 @@ fn run_bench(cli: &Cli, args: &BenchArgs) -> Result<()> {
     print!("{}", results.table());
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&results)?;
-        imageio::write_atomically(path, |temp| {
-            std::fs::write(temp, &text).map_err(|e| e.to_string())
-        })?;
+        imageio::write_file_atomically(path, &text)?;
         println!("wrote {}", path.display());
     }
     if let Some(path) = &args.csv {
         let text = results.csv();
-        imageio::write_atomically(path, |temp| {
-            std::fs::write(temp, &text).map_err(|e| e.to_string())
-        })?;
+        imageio::write_file_atomically(path, &text)?;
         println!("wrote {}", path.display());
     }
     Ok(())
@@ -843,9 +839,7 @@ fn run_sweep(cli: &Cli, args: &SweepArgs) -> Result<()> {
     let studies_read = report::collect(&written)?;
     let report_path = args.out.join("REPORT.md");
     let text = report::render(&studies_read, &report_path);
-    imageio::write_atomically(&report_path, |temp| {
-        std::fs::write(temp, &text).map_err(|e| e.to_string())
-    })?;
+    imageio::write_file_atomically(&report_path, &text)?;
     println!(
         "\n{} stud{} in {:.0} s; report: {}",
         studies.len(),
@@ -974,9 +968,7 @@ fn run_tables(cli: &Cli, args: &TablesArgs) -> Result<()> {
     );
     if let Some(path) = &args.out {
         let bytes = tir::reference_file_bytes(&table);
-        imageio::write_atomically(path, |temp| {
-            std::fs::write(temp, &bytes).map_err(|e| e.to_string())
-        })?;
+        imageio::write_file_atomically(path, &bytes)?;
         println!("wrote {}", path.display());
     }
     if let Some(path) = &args.error_map {
@@ -1059,9 +1051,7 @@ fn run_diff(args: &DiffArgs) -> Result<()> {
 fn run_report(args: &ReportArgs) -> Result<()> {
     let studies = report::collect(&args.dirs)?;
     let text = report::render(&studies, &args.out);
-    imageio::write_atomically(&args.out, |temp| {
-        std::fs::write(temp, &text).map_err(|e| e.to_string())
-    })?;
+    imageio::write_file_atomically(&args.out, &text)?;
     println!(
         "wrote {} ({} stud{})",
         args.out.display(),

@@ -473,9 +473,7 @@ fn write_reference(path: &Path, grid: &Grid, texels: &[f32], slices: u32) -> Res
     for v in texels {
         out.extend(v.to_le_bytes());
     }
-    imageio::write_atomically(path, |temp| {
-        std::fs::write(temp, &out).map_err(|e| e.to_string())
-    })?;
+    imageio::write_file_atomically(path, &out)?;
     println!("wrote {}", path.display());
     Ok(())
 }

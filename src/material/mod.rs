@@ -128,10 +128,7 @@ impl Stack {
 
     /// Writes [`Stack::to_toml`] to `path` atomically (a temporary file, then a rename).
     pub fn save(&self, path: &Path) -> crate::error::Result<()> {
-        let text = self.to_toml();
-        crate::imageio::write_atomically(path, |temp| {
-            std::fs::write(temp, &text).map_err(|e| e.to_string())
-        })
+        crate::imageio::write_file_atomically(path, self.to_toml())
     }
 
     /// The layers as the model consumes them.

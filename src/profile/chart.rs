@@ -46,9 +46,7 @@ impl Chart {
             self.draw(backend.into_drawing_area())
                 .map_err(|e| chart_error(&svg_path, e))?;
         }
-        crate::imageio::write_atomically(&svg_path, |temp| {
-            std::fs::write(temp, &svg).map_err(|e| e.to_string())
-        })?;
+        crate::imageio::write_file_atomically(&svg_path, &svg)?;
 
         let png_path = stem.with_extension("png");
         let mut canvas = Canvas::new(WIDTH, HEIGHT);

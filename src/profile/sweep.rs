@@ -36,6 +36,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+use crate::imageio::write_file_atomically;
 use crate::material::Stack;
 use crate::shader::variant::AXES;
 use crate::shader::VariantKey;
@@ -596,12 +597,6 @@ pub fn run(
     Ok((results, meta))
 }
 
-fn write_text(path: &Path, text: &str) -> Result<()> {
-    crate::imageio::write_atomically(path, |temp| {
-        std::fs::write(temp, text).map_err(|e| e.to_string())
-    })
-}
-
 /// Writes `results.json`, `results.csv`, `study.json`, `sweep.toml` (the file as run) and the
 /// charts into `dir`; returns the chart paths (PNG).
 pub fn write(
@@ -616,10 +611,10 @@ pub fn write(
     })?;
     let results_json = serde_json::to_string_pretty(results).expect("results serialise");
     let meta_json = serde_json::to_string_pretty(meta).expect("study metadata serialises");
-    write_text(&dir.join("results.json"), &results_json)?;
-    write_text(&dir.join("results.csv"), &results.csv())?;
-    write_text(&dir.join("study.json"), &meta_json)?;
-    write_text(&dir.join("sweep.toml"), &study.source_text)?;
+    write_file_atomically(&dir.join("results.json"), &results_json)?;
+    write_file_atomically(&dir.join("results.csv"), &results.csv())?;
+    write_file_atomically(&dir.join("study.json"), &meta_json)?;
+    write_file_atomically(&dir.join("sweep.toml"), &study.source_text)?;
     let mut charts = Vec::new();
     for (stem, chart) in charts_of(results, meta) {
         let path = dir.join(stem);
