@@ -11,6 +11,7 @@ use crate::error::{Error, Result};
 use crate::shader::variant::VariantKey;
 
 use super::bench::{Results, Run};
+use super::stats::MinMeanMax;
 use super::sweep::{key_matches, Published, StudyMeta};
 
 /// One study's directory, read back.
@@ -542,8 +543,9 @@ fn reading(s: &StudyDir) -> Vec<String> {
         }
         if !time.is_empty() {
             let range = |v: &[f64]| {
-                let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-                let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                let MinMeanMax {
+                    min: lo, max: hi, ..
+                } = MinMeanMax::of(v.iter().copied()).expect("a non-empty list");
                 if (hi - lo).abs() < 0.005 {
                     format!("{lo:.2}×")
                 } else {

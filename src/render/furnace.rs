@@ -12,6 +12,7 @@ use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
 use crate::model::LayerParams;
+use crate::profile::stats::MinMeanMax;
 use crate::shader::VariantKey;
 use crate::tables::environment::EnvDesc;
 
@@ -27,13 +28,10 @@ pub struct FurnaceBin {
     pub samples: usize,
 }
 
-/// Minimum, mean and maximum over all bins and channels.
+/// Minimum, mean and maximum over all bins and channels (NaN for no bins).
 pub fn summary(bins: &[FurnaceBin]) -> (f64, f64, f64) {
-    let values: Vec<f64> = bins.iter().flat_map(|b| b.energy).collect();
-    let min = values.iter().copied().fold(f64::INFINITY, f64::min);
-    let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let mean = values.iter().sum::<f64>() / values.len().max(1) as f64;
-    (min, mean, max)
+    MinMeanMax::of(bins.iter().flat_map(|b| b.energy))
+        .map_or((f64::NAN, f64::NAN, f64::NAN), |s| (s.min, s.mean, s.max))
 }
 
 /// Renders `layers` under a white environment at `size`² pixels and bins the sphere's

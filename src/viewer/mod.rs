@@ -34,6 +34,7 @@ use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::imageio;
 use crate::material::Stack;
+use crate::profile::stats::MinMeanMax;
 use crate::render::scene::Camera;
 use crate::shader::{Model, VariantKey};
 use crate::vk::{
@@ -489,13 +490,7 @@ impl ApplicationHandler for App<'_> {
 
 /// Average, minimum and maximum of a history of milliseconds.
 pub fn summary(history: &VecDeque<f64>) -> Option<(f64, f64, f64)> {
-    if history.is_empty() {
-        return None;
-    }
-    let sum: f64 = history.iter().sum();
-    let min = history.iter().copied().fold(f64::INFINITY, f64::min);
-    let max = history.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    Some((sum / history.len() as f64, min, max))
+    MinMeanMax::of(history.iter().copied()).map(|s| (s.mean, s.min, s.max))
 }
 
 /// The stack model a variant model implies (the baseline keeps the stack's own).
