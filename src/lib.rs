@@ -8,6 +8,7 @@
 //! - [`model`] — the CPU reference in f64;
 //! - [`material`] — layers;
 //! - [`imageio`] — EXR/PNG input and atomic output;
+//! - [`size`] — `WxH` image sizes, one limit for the command line and the sweep files;
 //! - [`output`] — the JSON and tables commands print;
 //! - [`profile`] — the bench runner, statistics, result files;
 //! - [`viewer`] — the interactive window (winit + egui).
@@ -21,9 +22,11 @@ pub mod output;
 pub mod profile;
 pub mod render;
 pub mod shader;
+pub mod size;
 pub mod tables;
 pub mod viewer;
 pub mod vk;
 
 pub use error::{Error, Result};
 pub use gpu::Gpu;
+pub use size::Size;

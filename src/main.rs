@@ -4,7 +4,6 @@ mod tables_cli;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::str::FromStr;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
@@ -24,7 +23,7 @@ use lamina::shader::Model;
 use lamina::shader::VariantKey;
 use lamina::tables::environment::EnvDesc;
 use lamina::vk::{DeviceSelector, InstanceDesc};
-use lamina::Gpu;
+use lamina::{Gpu, Size};
 
 #[derive(Parser)]
 #[command(
@@ -377,34 +376,6 @@ fn view(cli: &Cli, args: &ViewArgs) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// `WxH`, each side in 1..=16384.
-#[derive(Clone, Copy, Debug)]
-struct Size {
-    width: u32,
-    height: u32,
-}
-
-impl FromStr for Size {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        const MAX: u32 = 16384;
-        let (w, h) = s
-            .split_once(['x', 'X'])
-            .ok_or_else(|| format!("`{s}` is not WIDTHxHEIGHT, e.g. 640x360"))?;
-        let side = |v: &str, name: &str| {
-            v.trim()
-                .parse::<u32>()
-                .ok()
-                .filter(|n| (1..=MAX).contains(n))
-                .ok_or_else(|| format!("{name} `{v}` must be an integer in 1..={MAX}"))
-        };
-        Ok(Self {
-            width: side(w, "width")?,
-            height: side(h, "height")?,
-        })
-    }
 }
 
 /// A relative asset path that does not exist under the working directory is looked up in the

@@ -40,11 +40,10 @@ use crate::imageio::write_file_atomically;
 use crate::material::Stack;
 use crate::shader::variant::AXES;
 use crate::shader::VariantKey;
+use crate::size::Size;
 
 use super::bench::Case;
 
-/// Largest side accepted for `size` and `counter_size`.
-pub const MAX_SIDE: u32 = 4096;
 /// The pseudo-axes a sweep adds to the variant axes.
 pub const EXTRA_AXES: [&str; 2] = ["active_layers", "material"];
 
@@ -198,16 +197,19 @@ fn read(file: &Path) -> Result<SweepFile> {
     })
 }
 
-/// Parses `WxH` with both sides in 1..=[`MAX_SIDE`].
-pub fn parse_size(text: &str) -> Option<(u32, u32)> {
-    let (w, h) = text.split_once('x')?;
-    let side = |s: &str| {
-        s.trim()
-            .parse::<u32>()
-            .ok()
-            .filter(|n| (1..=MAX_SIDE).contains(n))
-    };
-    Some((side(w)?, side(h)?))
+/// `size` and `counter_size`: `WxH` within [`Size`]'s limit, as (width, height).
+fn parse_size(file: &Path, field: &str, text: &str) -> Result<(u32, u32)> {
+    let size: Size = text.parse().map_err(|_| {
+        bad(
+            file,
+            field,
+            &format!(
+                "`{text}`: expected WxH with both sides in 1..={}",
+                Size::MAX_SIDE
+            ),
+        )
+    })?;
+    Ok((size.width, size.height))
 }
 
 fn value_text(value: &toml::Value) -> Option<String> {
@@ -247,13 +249,7 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
         .clone()
         .or_else(|| sweep.size.clone())
         .unwrap_or_else(|| "320x180".into());
-    let (width, height) = parse_size(&size_text).ok_or_else(|| {
-        bad(
-            file,
-            "size",
-            &format!("`{size_text}`: expected WxH with both sides in 1..={MAX_SIDE}"),
-        )
-    })?;
+    let (width, height) = parse_size(file, "size", &size_text)?;
     let frames = over.frames.or(sweep.frames).unwrap_or(10);
     if frames == 0 {
         return Err(bad(
@@ -271,13 +267,7 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
                 .clone()
                 .or_else(|| sweep.counter_size.clone())
                 .unwrap_or_else(|| "48x48".into());
-            Some(parse_size(&text).ok_or_else(|| {
-                bad(
-                    file,
-                    "counter_size",
-                    &format!("`{text}`: expected WxH with both sides in 1..={MAX_SIDE}"),
-                )
-            })?)
+            Some(parse_size(file, "counter_size", &text)?)
         }
         Some(other) => {
             return Err(bad(
