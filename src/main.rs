@@ -10,7 +10,7 @@ use clap::{Parser, Subcommand};
 
 use indicatif::{ProgressBar, ProgressStyle};
 use lamina::imageio;
-use lamina::material::Stack;
+use lamina::material::{resolve_with_variant, Stack};
 use lamina::model::fgd::ExactFgd;
 use lamina::model::{tm2, tm6, Evaluation, LayerParams, NoTir};
 use lamina::output::{EvalReport, EvalSample};
@@ -333,7 +333,7 @@ struct ViewArgs {
 }
 
 fn view(cli: &Cli, args: &ViewArgs) -> Result<()> {
-    let (stack, variant) = material_and_variant(&args.material, args.variant.as_deref())?;
+    let (stack, variant) = resolve_with_variant(&args.material, args.variant.as_deref())?;
     let env = asset_path(&args.env);
     let env_dir = env
         .parent()
@@ -443,27 +443,8 @@ fn devices(cli: &Cli) -> Result<()> {
     Ok(())
 }
 
-/// Loads the material and builds its variant: axes the key leaves out come from the defaults,
-/// the model from the material, and `max_layers` grows to fit the stack.
-fn material_and_variant(material: &str, key: Option<&str>) -> Result<(Stack, VariantKey)> {
-    let stack = Stack::resolve(material)?;
-    let base = VariantKey {
-        model: stack.model,
-        max_layers: VariantKey::default()
-            .max_layers
-            .max(stack.layers.len() as u32),
-        ..VariantKey::default()
-    };
-    let variant = match key {
-        Some(k) => VariantKey::parse_over(k, base)?,
-        None => base,
-    };
-    stack.check_fits(variant.max_layers)?;
-    Ok((stack, variant))
-}
-
 fn eval(cli: &Cli, args: &EvalArgs) -> Result<()> {
-    let (stack, variant) = material_and_variant(&args.material, args.variant.as_deref())?;
+    let (stack, variant) = resolve_with_variant(&args.material, args.variant.as_deref())?;
     if let Some(c) = args
         .cosines
         .iter()
@@ -520,7 +501,7 @@ fn run_furnace(cli: &Cli, args: &FurnaceArgs) -> Result<()> {
     if !(1..=256).contains(&args.bins) {
         anyhow::bail!("--bins {}: must be in 1..=256", args.bins);
     }
-    let (stack, variant) = material_and_variant(&args.material, args.variant.as_deref())?;
+    let (stack, variant) = resolve_with_variant(&args.material, args.variant.as_deref())?;
     let gpu = open_gpu(cli)?;
     let layers = stack.params();
     let bins = furnace::gpu(&gpu, variant, &layers, 256, args.bins)?;
@@ -576,16 +557,13 @@ fn run_sheet(cli: &Cli, args: &SheetArgs) -> Result<()> {
     let mut max_layers = 1;
     for path in lamina::material::presets() {
         let stack = Stack::load(&path)?;
-        max_layers = max_layers.max(stack.layers.len() as u32);
+        max_layers = max_layers.max(stack.layers.len());
         rows.push(sheet::SheetRow {
             name: stack.name.clone(),
             layers: stack.params(),
         });
     }
-    let base = VariantKey {
-        max_layers: VariantKey::default().max_layers.max(max_layers),
-        ..VariantKey::default()
-    };
+    let base = lamina::material::base_variant(VariantKey::default().model, max_layers);
     let variants = keys
         .iter()
         .map(|k| VariantKey::parse_over(k, base))
@@ -619,13 +597,12 @@ fn run_bench(cli: &Cli, args: &BenchArgs) -> Result<()> {
     }
     let env_path = asset_path(&args.env);
     let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
-    let (stack, base) = material_and_variant(&args.material, None)?;
+    let stack = Stack::resolve(&args.material)?;
     let cases = args
         .variants
         .iter()
         .map(|k| {
-            let variant = VariantKey::parse_over(k, base)?;
-            stack.check_fits(variant.max_layers)?;
+            let variant = stack.variant(Some(k))?;
             Ok(Case {
                 variant,
                 stack: stack.clone(),
@@ -1042,7 +1019,7 @@ fn count_worker(cli: &Cli, args: &CountWorkerArgs) -> Result<()> {
         .iter()
         .map(|c| {
             let stack = Stack::from_toml(&c.stack_toml, &args.job)?;
-            let variant = VariantKey::parse_over(&c.variant, VariantKey::default())?;
+            let variant = stack.variant(Some(&c.variant))?;
             Ok(Case {
                 variant,
                 stack: Stack {
@@ -1071,7 +1048,7 @@ fn check_validation(gpu: &Gpu) -> Result<()> {
 fn render(cli: &Cli, args: &RenderArgs) -> Result<()> {
     let env_path = asset_path(&args.env);
     let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
-    let (stack, variant) = material_and_variant(&args.material, args.variant.as_deref())?;
+    let (stack, variant) = resolve_with_variant(&args.material, args.variant.as_deref())?;
     let layers = stack.params();
     let gpu = open_gpu(cli)?;
     let mut renderer = Renderer::new(&gpu, &equirect, EnvDesc::default())?;

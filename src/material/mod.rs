@@ -36,6 +36,9 @@
 //! a `depth`; a stack has 1 to [`MAX_LAYERS_LIMIT`] layers (the GPU buffer's size), and
 //! [`Stack::check_fits`] tests it against a variant's static array size.
 //!
+//! [`Stack::variant`] gives the variant a stack is shaded with for a key that names only some
+//! axes (the model and `max_layers` follow the stack; `variant.rs`).
+//!
 //! [`MAX_LAYERS_LIMIT`]: crate::shader::variant::MAX_LAYERS_LIMIT
 
 mod artist;
@@ -44,6 +47,7 @@ mod parse;
 mod presets;
 #[cfg(test)]
 mod tests;
+mod variant;
 mod write;
 
 use std::path::{Path, PathBuf};
@@ -53,6 +57,7 @@ use crate::shader::Model;
 
 pub use artist::gulbrandsen;
 pub use presets::presets;
+pub use variant::{base_variant, resolve_with_variant};
 
 /// A named stack of layers, top first, with the model it is meant for.
 #[derive(Clone, Debug, PartialEq)]

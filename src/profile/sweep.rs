@@ -425,18 +425,12 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
                     message: e.to_string(),
                 })?;
             }
-            let material_base = VariantKey {
-                model: stack.model,
-                max_layers: VariantKey::default()
-                    .max_layers
-                    .max(stack.layers.len() as u32),
-                ..VariantKey::default()
-            };
-            let variant =
-                VariantKey::parse_over(&key_text, material_base).map_err(|e| Error::Input {
+            let variant = VariantKey::parse_over(&key_text, stack.base_variant()).map_err(|e| {
+                Error::Input {
                     path: file.to_owned(),
                     message: format!("variant `{key_text}`: {e}"),
-                })?;
+                }
+            })?;
             if stack.layers.len() > variant.max_layers as usize {
                 skipped.push(format!("{} with {variant}", stack.name));
                 continue;
