@@ -6,6 +6,7 @@
 //! - [`tables`] — GPU-built tables (prefiltered environment, split-sum) with CPU references;
 //! - [`render`] — passes (sky, shaded sphere), the scene and readback;
 //! - [`model`] — the CPU reference in f64;
+//! - [`oracle`] — the CPU reference for a variant (`eval --backend cpu`, the furnace);
 //! - [`material`] — layers;
 //! - [`imageio`] — EXR/PNG input and atomic output;
 //! - [`size`] — `WxH` image sizes, one limit for the command line and the sweep files;
@@ -18,6 +19,7 @@ pub mod gpu;
 pub mod imageio;
 pub mod material;
 pub mod model;
+pub mod oracle;
 pub mod output;
 pub mod profile;
 pub mod render;

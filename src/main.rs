@@ -11,15 +11,12 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use lamina::imageio;
 use lamina::material::{resolve_with_variant, Stack};
-use lamina::model::fgd::ExactFgd;
-use lamina::model::{tm2, tm6, Evaluation, LayerParams, NoTir};
 use lamina::output::{EvalReport, EvalSample};
 use lamina::profile::bench::{self, BenchConfig, Case};
 use lamina::profile::sweep::{self, CounterSetup};
 use lamina::profile::{counter, diff, report};
 use lamina::render::Renderer;
 use lamina::render::{eval::GpuEvaluator, furnace, sheet};
-use lamina::shader::Model;
 use lamina::shader::VariantKey;
 use lamina::tables::environment::EnvDesc;
 use lamina::vk::{DeviceSelector, InstanceDesc};
@@ -457,7 +454,7 @@ fn eval(cli: &Cli, args: &EvalArgs) -> Result<()> {
             "cpu",
             args.cosines
                 .iter()
-                .map(|&c| cpu_model(variant, &stack.params(), c))
+                .map(|&c| lamina::oracle::evaluate(variant, &stack.params(), c))
                 .collect::<Vec<_>>(),
         ),
         Backend::Gpu => {
@@ -487,16 +484,6 @@ fn eval(cli: &Cli, args: &EvalArgs) -> Result<()> {
     Ok(())
 }
 
-/// The f64 oracle: the variant's model with exactly integrated FGD (its G2 form) and no TIR
-/// correction.
-fn cpu_model(variant: VariantKey, layers: &[LayerParams], cos_theta: f64) -> Evaluation {
-    let fgd = ExactFgd::new(variant.g2);
-    match variant.model {
-        Model::Tm6 => tm6::evaluate(layers, cos_theta, &fgd, &NoTir),
-        _ => tm2::evaluate(layers, cos_theta, &fgd, &NoTir),
-    }
-}
-
 fn run_furnace(cli: &Cli, args: &FurnaceArgs) -> Result<()> {
     if !(1..=256).contains(&args.bins) {
         anyhow::bail!("--bins {}: must be in 1..=256", args.bins);
@@ -507,17 +494,7 @@ fn run_furnace(cli: &Cli, args: &FurnaceArgs) -> Result<()> {
     let bins = furnace::gpu(&gpu, variant, &layers, 256, args.bins)?;
     check_validation(&gpu)?;
     let cosines: Vec<f64> = bins.iter().map(|b| b.cos_theta).collect();
-    let cpu = furnace::cpu(&cosines, |c| {
-        if variant.model == Model::Ggx {
-            let top = VariantKey {
-                model: Model::Tm2,
-                ..variant
-            };
-            cpu_model(top, &layers[..1], c).reflectance
-        } else {
-            cpu_model(variant, &layers, c).reflectance
-        }
-    });
+    let cpu = furnace::cpu(variant, &layers, &cosines);
     println!("white furnace: {} ({variant})", stack.name);
     println!(
         "GPU: the sphere rendered at 256x256 under radiance 1, binned by n·v (FGD: {})",

@@ -3,7 +3,7 @@
 //!
 //! The GPU side renders the sphere under a constant environment of radiance 1 and averages the
 //! pixels by the cosine between normal and view (computed on the CPU from the camera and the
-//! sphere); the CPU side evaluates the model's total reflectance at the bins' centres.
+//! sphere); the CPU side evaluates the oracle's total reflectance at the bins' mean cosines.
 
 use glam::Vec3;
 use half::f16;
@@ -12,8 +12,9 @@ use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
 use crate::model::LayerParams;
+use crate::oracle;
 use crate::profile::stats::MinMeanMax;
-use crate::shader::VariantKey;
+use crate::shader::{Model, VariantKey};
 use crate::tables::environment::EnvDesc;
 
 use super::renderer::Renderer;
@@ -100,14 +101,25 @@ fn sphere_cosine(eye: Vec3, dir: Vec3) -> Option<f64> {
     Some(normal.dot(-dir).clamp(0.0, 1.0))
 }
 
-/// The CPU model's total reflectance at each view cosine, through `evaluate`
-/// (cos θ → reflectance).
-pub fn cpu(cosines: &[f64], evaluate: impl Fn(f64) -> [f64; 3]) -> Vec<FurnaceBin> {
+/// The CPU side: the oracle's total reflectance ([`oracle::evaluate`]) for `variant` at each
+/// view cosine. The `ggx` baseline shades the top layer alone with one GGX lobe, so its
+/// reference is that layer through the 2-flux model.
+pub fn cpu(variant: VariantKey, layers: &[LayerParams], cosines: &[f64]) -> Vec<FurnaceBin> {
+    let (variant, layers) = match variant.model {
+        Model::Ggx => (
+            VariantKey {
+                model: Model::Tm2,
+                ..variant
+            },
+            &layers[..1],
+        ),
+        _ => (variant, layers),
+    };
     cosines
         .iter()
         .map(|&cos_theta| FurnaceBin {
             cos_theta,
-            energy: evaluate(cos_theta),
+            energy: oracle::evaluate(variant, layers, cos_theta).reflectance,
             samples: 1,
         })
         .collect()
