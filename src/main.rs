@@ -13,7 +13,7 @@ use lamina::imageio;
 use lamina::material::{resolve_with_variant, Stack};
 use lamina::output::{EvalReport, EvalSample};
 use lamina::profile::bench::{self, BenchConfig, Case};
-use lamina::profile::sweep::{self, CounterSetup};
+use lamina::profile::sweep;
 use lamina::profile::{counter, diff, report};
 use lamina::render::Renderer;
 use lamina::render::{eval::GpuEvaluator, furnace, sheet};
@@ -602,28 +602,15 @@ fn run_bench(cli: &Cli, args: &BenchArgs) -> Result<()> {
     bar.finish_and_clear();
     check_validation(&gpu)?;
     if args.counter.is_some() {
-        let setup = counter_setup(&gpu, &env_path)?;
+        let setup = counter::CounterSetup::for_device(&gpu, &env_path)?;
         let all = config.with_baselines();
         let bar = progress_bar("counted (callgrind)");
-        let counts = counter::count_instructions(
-            &counter::CountRequest {
-                exe: &setup.exe,
-                global_args: setup.global_args.clone(),
-                env_map: &setup.env_map,
-                cases: &all,
-                width: args.counter_size.width,
-                height: args.counter_size.height,
-            },
-            |done, total| {
-                bar.set_length(total as u64);
-                bar.set_position(done as u64);
-            },
-        )?;
+        let size = (args.counter_size.width, args.counter_size.height);
+        counter::add_counts(&mut results, &setup, &all, size, |done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        })?;
         bar.finish_and_clear();
-        for (run, n) in results.runs.iter_mut().zip(counts) {
-            run.instructions = Some(n.jit);
-            run.instructions_total = Some(n.total);
-        }
     }
     print!("{}", results.table());
     if let Some(path) = &args.json {
@@ -649,30 +636,6 @@ fn progress_bar(what: &str) -> ProgressBar {
     );
     bar.set_prefix(what.to_owned());
     bar
-}
-
-/// How the parent starts `lamina count-worker` under callgrind: this executable, the same
-/// device, the same environment map. Refused off lavapipe: the counter counts CPU
-/// instructions, which measure a shader only where the CPU runs it.
-fn counter_setup(gpu: &Gpu, env_map: &Path) -> Result<CounterSetup> {
-    let report = &gpu.device.report;
-    if !report.device_type.eq_ignore_ascii_case("cpu") {
-        anyhow::bail!(
-            "--counter instructions counts the CPU instructions lavapipe executes; the selected \
-             device `{}` is of type {} (choose lavapipe with --device llvmpipe, or drop the counter)",
-            report.name,
-            report.device_type
-        );
-    }
-    // The worker runs without the validation layer even when this run has it: the layer's
-    // hooks on the counted submission would be counted too. Its Vulkan work is the same as
-    // the (validated) timing run's.
-    let global_args = vec!["--device".to_string(), report.name.clone()];
-    Ok(CounterSetup {
-        exe: std::env::current_exe().context("locating the lamina executable")?,
-        global_args,
-        env_map: env_map.to_owned(),
-    })
 }
 
 fn run_sweep(cli: &Cli, args: &SweepArgs) -> Result<()> {
@@ -729,7 +692,7 @@ fn run_sweep(cli: &Cli, args: &SweepArgs) -> Result<()> {
     let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
     let gpu = open_gpu(cli)?;
     let setup = if studies.iter().any(|s| s.counter.is_some()) {
-        Some(counter_setup(&gpu, &env_path)?)
+        Some(counter::CounterSetup::for_device(&gpu, &env_path)?)
     } else {
         None
     };
@@ -987,25 +950,7 @@ fn run_report(args: &ReportArgs) -> Result<()> {
 }
 
 fn count_worker(cli: &Cli, args: &CountWorkerArgs) -> Result<()> {
-    let text = std::fs::read_to_string(&args.job)
-        .with_context(|| format!("reading {}", args.job.display()))?;
-    let job: counter::WorkerJob = serde_json::from_str(&text)
-        .with_context(|| format!("{}: not a counter job", args.job.display()))?;
-    let cases = job
-        .cases
-        .iter()
-        .map(|c| {
-            let stack = Stack::from_toml(&c.stack_toml, &args.job)?;
-            let variant = stack.variant(Some(&c.variant))?;
-            Ok(Case {
-                variant,
-                stack: Stack {
-                    name: c.material.clone(),
-                    ..stack
-                },
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let cases = counter::WorkerJob::read_cases(&args.job)?;
     let equirect = imageio::read_exr(&args.env).context("reading the environment map")?;
     let gpu = open_gpu(cli)?;
     counter::worker(&gpu, &equirect, &cases, args.size.width, args.size.height)?;

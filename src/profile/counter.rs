@@ -17,11 +17,12 @@ use std::process::{Command, Stdio};
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
+use crate::material::Stack;
 use crate::render::forward::ForwardPass;
 use crate::render::{Renderer, ShadedPhase};
 use crate::tables::environment::EnvDesc;
 
-use super::bench::Case;
+use super::bench::{Case, Results};
 use super::callgrind;
 
 /// The environment the worker prefilters: small, because the worker runs under valgrind and
@@ -75,6 +76,69 @@ pub fn worker(
         let name = CString::new(format!("{DUMP_PREFIX}{i}")).expect("no NUL in a number");
         callgrind::dump_stats_at(&name);
         eprintln!("{PROGRESS_PREFIX}{}/{}", i + 1, cases.len());
+    }
+    Ok(())
+}
+
+/// How a run starts `lamina count-worker` under callgrind: which executable, with which global
+/// arguments, on which environment map.
+pub struct CounterSetup {
+    pub exe: PathBuf,
+    pub global_args: Vec<String>,
+    pub env_map: PathBuf,
+}
+
+impl CounterSetup {
+    /// The counter's device policy. Refused off a CPU device (lavapipe): the counter counts CPU
+    /// instructions, which measure a shader only where the CPU runs it. The worker is this
+    /// executable on the same device (by name) and environment map, and runs without the
+    /// validation layer even when this run has it: the layer's hooks on the counted submission
+    /// would be counted too. Its Vulkan work is the same as the (validated) timing run's.
+    pub fn for_device(gpu: &Gpu, env_map: &Path) -> Result<Self> {
+        let report = &gpu.device.report;
+        if !report.device_type.eq_ignore_ascii_case("cpu") {
+            return Err(Error::Unsupported(format!(
+                "--counter instructions counts the CPU instructions lavapipe executes; the \
+                 selected device `{}` is of type {} (choose lavapipe with --device llvmpipe, or \
+                 drop the counter)",
+                report.name, report.device_type
+            )));
+        }
+        let exe = std::env::current_exe()
+            .map_err(|e| Error::Unsupported(format!("locating the lamina executable: {e}")))?;
+        Ok(Self {
+            exe,
+            global_args: vec!["--device".to_string(), report.name.clone()],
+            env_map: env_map.to_owned(),
+        })
+    }
+}
+
+/// Counts the instructions of each case's shaded draw at `width`×`height` and stores them in
+/// `results`, whose runs are `cases` in order (a bench run of [`BenchConfig::with_baselines`]).
+///
+/// [`BenchConfig::with_baselines`]: super::bench::BenchConfig::with_baselines
+pub fn add_counts(
+    results: &mut Results,
+    setup: &CounterSetup,
+    cases: &[Case],
+    (width, height): (u32, u32),
+    progress: impl FnMut(usize, usize),
+) -> Result<()> {
+    let counts = count_instructions(
+        &CountRequest {
+            exe: &setup.exe,
+            global_args: setup.global_args.clone(),
+            env_map: &setup.env_map,
+            cases,
+            width,
+            height,
+        },
+        progress,
+    )?;
+    for (run, count) in results.runs.iter_mut().zip(counts) {
+        run.instructions = Some(count.jit);
+        run.instructions_total = Some(count.total);
     }
     Ok(())
 }
@@ -296,6 +360,32 @@ pub struct WorkerCase {
 }
 
 impl WorkerJob {
+    /// The cases of the job file at `path`, as the parent wrote them ([`count_instructions`]).
+    pub fn read_cases(path: &Path) -> Result<Vec<Case>> {
+        let input_error = |message: String| Error::Input {
+            path: path.to_owned(),
+            message,
+        };
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| input_error(format!("cannot read the counter job: {e}")))?;
+        let job: Self = serde_json::from_str(&text)
+            .map_err(|e| input_error(format!("not a counter job ({e})")))?;
+        job.cases
+            .iter()
+            .map(|c| {
+                let stack = Stack::from_toml(&c.stack_toml, path)?;
+                let variant = stack.variant(Some(&c.variant))?;
+                Ok(Case {
+                    variant,
+                    stack: Stack {
+                        name: c.material.clone(),
+                        ..stack
+                    },
+                })
+            })
+            .collect()
+    }
+
     fn from_cases(cases: &[Case]) -> Self {
         Self {
             cases: cases

@@ -43,6 +43,7 @@ use crate::shader::VariantKey;
 use crate::size::Size;
 
 use super::bench::Case;
+use super::counter::CounterSetup;
 
 /// The pseudo-axes a sweep adds to the variant axes.
 pub const EXTRA_AXES: [&str; 2] = ["active_layers", "material"];
@@ -489,13 +490,6 @@ pub fn key_matches(variant: &str, pattern: &str) -> bool {
         .all(|want| pairs.contains(&want))
 }
 
-/// Where the instruction counter's worker comes from (`lamina count-worker`).
-pub struct CounterSetup {
-    pub exe: PathBuf,
-    pub global_args: Vec<String>,
-    pub env_map: PathBuf,
-}
-
 /// What a study's directory holds besides `results.json`: read by `lamina report`.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 pub struct StudyMeta {
@@ -538,22 +532,10 @@ pub fn run(
     let mut results = super::bench::run(gpu, equirect, &config, |done, total| {
         progress("frames", done as usize, total as usize)
     })?;
-    if let (Some((w, h)), Some(setup)) = (study.counter, counter) {
-        let counts = super::counter::count_instructions(
-            &super::counter::CountRequest {
-                exe: &setup.exe,
-                global_args: setup.global_args.clone(),
-                env_map: &setup.env_map,
-                cases: &all,
-                width: w,
-                height: h,
-            },
-            |done, total| progress("counted", done, total),
-        )?;
-        for (run, count) in results.runs.iter_mut().zip(counts) {
-            run.instructions = Some(count.jit);
-            run.instructions_total = Some(count.total);
-        }
+    if let (Some(size), Some(setup)) = (study.counter, counter) {
+        super::counter::add_counts(&mut results, setup, &all, size, |done, total| {
+            progress("counted", done, total)
+        })?;
     }
     let meta = StudyMeta {
         name: study.name.clone(),
