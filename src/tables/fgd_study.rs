@@ -1,12 +1,31 @@
 //! The FGD error studies (issue #6): how far the resampled 4-D table is from the full one, and
-//! how far each `fgd` value is from the exact directional albedo. `lamina tables fgd-resampled`
-//! and `lamina tables fgd-belcour` print them; the numbers land in profiling/TABLES.md.
+//! how far each `fgd` value is from the exact directional albedo; the shaders' own lookups
+//! measured through `fgd_probe.comp.glsl`. `lamina tables fgd-4d | fgd-resampled |
+//! fgd-belcour` print them; the numbers land in profiling/TABLES.md.
+//!
+//! The tables are built with [`G2_FORM`], the renderer's default, and compared with the exact
+//! FGD at [`EXACT_RESOLUTION`]² quadrature points.
 
+use std::path::Path;
+
+use crate::error::Result;
+use crate::gpu::Gpu;
 use crate::model::fgd::ExactFgd;
 use crate::model::Fgd as _;
-use crate::shader::G2;
+use crate::shader::{Fgd, G2};
 
-use super::fgd::{resampled_at, BelcourTable, Grid};
+use super::belcour::Basis;
+use super::cache;
+use super::fgd::{self, resampled_at, BelcourTable, FgdImages, FgdProbe, Filter, Grid, GridKind};
+use super::split_sum::{self, SplitSumTable};
+
+/// The G2 form `lamina tables` builds the FGD tables with: the renderer's default.
+pub const G2_FORM: G2 = G2::HeightCorrelated;
+/// Quadrature resolution of the exact FGD in the studies (within 1.3e-3 of the converged
+/// value at α = 0.1, src/model/fgd.rs).
+pub const EXACT_RESOLUTION: u32 = 256;
+/// Points of the hardware-path comparison.
+pub const PROBE_POINTS: usize = 20_000;
 
 /// Absolute errors over a set of points.
 #[derive(Clone, Copy, Debug)]
@@ -220,4 +239,325 @@ pub fn exact_points(g2: G2, resolution: u32) -> Vec<([f64; 4], Class, f64)> {
 pub fn belcour_unguarded(table: &BelcourTable, at: [f64; 4]) -> f64 {
     let [mu, alpha, eta, kappa] = at;
     table.basis.reconstruct(table.sample(mu, alpha), eta, kappa)
+}
+
+/// A 4-D grid as `lamina tables` asks for it: with `rebuild`, built on the GPU and stored in
+/// `cache_dir` (`false`: not from the cache); otherwise [`fgd::load_or_build_grid`].
+pub fn load_grid(
+    gpu: &Gpu,
+    kind: GridKind,
+    size: u32,
+    samples: u32,
+    cache_dir: Option<&Path>,
+    rebuild: bool,
+    progress: impl FnMut(u32, u32),
+) -> Result<(Grid, bool)> {
+    if !rebuild {
+        return fgd::load_or_build_grid(gpu, kind, G2_FORM, size, samples, cache_dir, progress);
+    }
+    let grid = fgd::build_grid(gpu, kind, G2_FORM, size, samples, progress)?;
+    if let Some(dir) = cache_dir {
+        let key = fgd::grid_cache_key(kind, G2_FORM, size, samples);
+        cache::store(dir, &key, &grid.texels)?;
+    }
+    Ok((grid, false))
+}
+
+/// The Belcour table likewise: with `rebuild`, built with a freshly fitted basis (and not
+/// stored); otherwise [`BelcourTable::load_or_build`].
+pub fn load_belcour(
+    gpu: &Gpu,
+    size: u32,
+    samples: u32,
+    cache_dir: Option<&Path>,
+    rebuild: bool,
+) -> Result<(BelcourTable, bool)> {
+    if rebuild {
+        let table = BelcourTable::build(gpu, G2_FORM, size, samples, Basis::fit())?;
+        return Ok((table, false));
+    }
+    BelcourTable::load_or_build(gpu, G2_FORM, size, samples, cache_dir)
+}
+
+/// The split-sum table the probes bind (unused by the FGD modes measured here, but bound).
+pub fn probe_split_table(gpu: &Gpu) -> Result<SplitSumTable> {
+    SplitSumTable::load_or_build(
+        gpu,
+        G2_FORM,
+        split_sum::DEFAULT_SIZE,
+        split_sum::DEFAULT_SAMPLES,
+    )
+}
+
+/// The shader's lookup (`fgd_probe.comp.glsl`) at every vertex with even μ and α indices
+/// (a quarter of them), against `expected(i, j, k, l)`.
+pub fn hardware_at_vertices(
+    probe: &FgdProbe<'_>,
+    split: &SplitSumTable,
+    images: &FgdImages,
+    grid: &Grid,
+    expected: impl Fn(u32, u32, u32, u32) -> f64,
+) -> Result<Errors> {
+    let [nm, na, ne, nk] = grid.dims;
+    let mut errors = Errors::default();
+    for l in 0..nk {
+        let mut points = Vec::new();
+        let mut index = Vec::new();
+        for k in 0..ne {
+            for j in (0..na).step_by(2) {
+                for i in (0..nm).step_by(2) {
+                    let at = grid.coordinates(i, j, k, l);
+                    points.push(at.map(|v| v as f32));
+                    index.push((i, j, k, at));
+                }
+            }
+        }
+        let values = probe.sample(split, images, &points)?;
+        for (v, (i, j, k, at)) in values.iter().zip(index) {
+            errors.add(f64::from(*v) - expected(i, j, k, l), at);
+        }
+    }
+    Ok(errors)
+}
+
+/// `fgd=4d`'s lookup (the 64×64×4096 image, two trilinear fetches) at the vertices against the
+/// grid's own texels: what the stacked layout and the hardware filter lose.
+pub fn full_lookup_error(gpu: &Gpu, grid: &Grid) -> Result<Errors> {
+    let images = FgdImages::stacked(gpu, Fgd::Full4d, grid, Filter::Box)?;
+    let probe = FgdProbe::new(gpu, Fgd::Full4d)?;
+    let split = probe_split_table(gpu)?;
+    hardware_at_vertices(&probe, &split, &images, grid, |i, j, k, l| {
+        f64::from(grid.texel(i, j, k, l))
+    })
+}
+
+/// The `fgd-resampled` study: each κ filter's resampling against the 4-D grid, one
+/// [`ResampledRow`] per filter ([`ResampledStudy::row`]).
+pub struct ResampledStudy<'g> {
+    gpu: &'g Gpu,
+    grid: &'g Grid,
+    split: SplitSumTable,
+    probe: FgdProbe<'g>,
+    points: Vec<[f32; 4]>,
+    /// `fgd=4d`'s lookup at `points`, when the device holds its 64×64×4096 image.
+    full: Option<Vec<f32>>,
+    /// Why the comparison of the shaders' lookups is skipped, when it is.
+    pub skipped: Option<String>,
+}
+
+/// One filter's row of the `fgd-resampled` study.
+pub struct ResampledRow {
+    pub filter: Filter,
+    /// The resampled table ([`fgd::resample`]).
+    pub table: Vec<f32>,
+    /// Its CPU lookup against the 4-D grid at every vertex ([`resampling_error`]).
+    pub table_error: Errors,
+    /// Per (κ, η) vertex, the largest error over (μ, α): `map[l][k]`.
+    pub map: Vec<Vec<f64>>,
+    /// The variants' lookups (`fgd=resampled4d` against `fgd=4d`) at [`PROBE_POINTS`] points;
+    /// `None` when skipped.
+    pub shader: Option<Errors>,
+    /// The shader's fetches at the vertices against the same lookup in f64.
+    pub hardware: Errors,
+}
+
+impl<'g> ResampledStudy<'g> {
+    pub fn new(gpu: &'g Gpu, grid: &'g Grid) -> Result<Self> {
+        let split = probe_split_table(gpu)?;
+        let points = probe_points(PROBE_POINTS, fgd::ETA_MAX, fgd::KAPPA_MAX);
+        let (full, skipped) = match FgdImages::stacked(gpu, Fgd::Full4d, grid, Filter::Box) {
+            Ok(images) => (
+                Some(FgdProbe::new(gpu, Fgd::Full4d)?.sample(&split, &images, &points)?),
+                None,
+            ),
+            Err(e) => (None, Some(e.to_string())),
+        };
+        Ok(Self {
+            gpu,
+            grid,
+            probe: FgdProbe::new(gpu, Fgd::Resampled4d)?,
+            split,
+            points,
+            full,
+            skipped,
+        })
+    }
+
+    pub fn row(&self, filter: Filter) -> Result<ResampledRow> {
+        let grid = self.grid;
+        let table = fgd::resample(grid, filter);
+        let (table_error, map) = resampling_error(grid, &table);
+        let images = FgdImages::stacked(self.gpu, Fgd::Resampled4d, grid, filter)?;
+        let shader = match &self.full {
+            Some(full) => {
+                let values = self.probe.sample(&self.split, &images, &self.points)?;
+                let mut e = Errors::default();
+                for ((p, r), f) in self.points.iter().zip(&values).zip(full) {
+                    e.add(f64::from(r - f), p.map(f64::from));
+                }
+                Some(e)
+            }
+            None => None,
+        };
+        let hardware =
+            hardware_at_vertices(&self.probe, &self.split, &images, grid, |i, j, k, l| {
+                resampled_at(grid, &table, i, j, k, grid.coordinates(i, j, k, l)[3])
+            })?;
+        Ok(ResampledRow {
+            filter,
+            table,
+            table_error,
+            map,
+            shader,
+            hardware,
+        })
+    }
+}
+
+/// The `fgd-belcour` accuracy study: every `fgd` value against the exact FGD over the
+/// [`interfaces`] at [`MU`] × [`ALPHA`], by [`Class`].
+pub struct Accuracy {
+    /// One per column: `belcour, basis only`, then each `fgd` value through its shader.
+    pub columns: Vec<String>,
+    pub rows: Vec<AccuracyRow>,
+}
+
+/// One class of interfaces: how many, and each column's errors over them.
+pub struct AccuracyRow {
+    pub class: Class,
+    pub interfaces: usize,
+    pub errors: Vec<Errors>,
+}
+
+/// Runs the accuracy study of [`Accuracy`] with `table` (the basis-only column) and every
+/// `fgd` value's own lookup.
+pub fn belcour_accuracy(
+    gpu: &Gpu,
+    table: &BelcourTable,
+    split: &SplitSumTable,
+) -> Result<Accuracy> {
+    let points = exact_points(G2_FORM, EXACT_RESOLUTION);
+    let probe_input: Vec<[f32; 4]> = points.iter().map(|p| p.0.map(|v| v as f32)).collect();
+    let mut columns: Vec<(String, Vec<f64>)> = vec![(
+        "belcour, basis only".into(),
+        points
+            .iter()
+            .map(|p| belcour_unguarded(table, p.0))
+            .collect(),
+    )];
+    for mode in [Fgd::Karis, Fgd::Belcour, Fgd::Full4d, Fgd::Resampled4d] {
+        let images = FgdImages::for_variant(gpu, mode, G2_FORM)?;
+        let values = FgdProbe::new(gpu, mode)?.sample(split, &images, &probe_input)?;
+        let label = if mode == Fgd::Belcour {
+            "belcour (fgd=belcour)".to_string()
+        } else {
+            format!("fgd={mode}")
+        };
+        columns.push((label, values.into_iter().map(f64::from).collect()));
+    }
+    let rows = Class::ALL
+        .into_iter()
+        .map(|class| AccuracyRow {
+            class,
+            interfaces: interfaces().iter().filter(|i| i.class == class).count(),
+            errors: columns
+                .iter()
+                .map(|(_, values)| {
+                    let mut e = Errors::default();
+                    for (p, v) in points.iter().zip(values) {
+                        if p.1 == class {
+                            e.add(v - p.2, p.0);
+                        }
+                    }
+                    e
+                })
+                .collect(),
+        })
+        .collect();
+    Ok(Accuracy {
+        columns: columns.into_iter().map(|(label, _)| label).collect(),
+        rows,
+    })
+}
+
+/// The Belcour error map's roughness.
+pub const MAP_ALPHA: f64 = 0.3;
+/// The Belcour error map's η range (dielectrics on both sides of 1).
+pub const MAP_ETA: (f64, f64) = (0.5, 2.5);
+/// Cells per axis of the Belcour error map.
+const MAP_CELLS: u32 = 48;
+
+/// |FGD − exact| over (μ, η) at α = [`MAP_ALPHA`] for dielectrics η ∈ [`MAP_ETA`]: the basis
+/// alone, and `fgd=belcour` as the shader samples it (the η < 1 table below 1), as (label,
+/// rows) panels; `progress(done, total)` follows the exact FGD's cells.
+pub fn belcour_error_panels(
+    gpu: &Gpu,
+    table: &BelcourTable,
+    split: &SplitSumTable,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Vec<(String, Vec<Vec<f64>>)>> {
+    let n = MAP_CELLS;
+    let exact = ExactFgd {
+        g2: G2_FORM,
+        resolution: 128,
+    };
+    let (eta_lo, eta_hi) = MAP_ETA;
+    let cells: Vec<[f64; 4]> = (0..n)
+        .flat_map(|y| {
+            let eta = eta_lo + (eta_hi - eta_lo) * (f64::from(y) + 0.5) / f64::from(n);
+            (0..n).map(move |x| [(f64::from(x) + 0.5) / f64::from(n), MAP_ALPHA, eta, 0.0])
+        })
+        .collect();
+    let truth: Vec<f64> = cells
+        .iter()
+        .enumerate()
+        .map(|(done, &[mu, alpha, eta, kappa])| {
+            progress(done + 1, cells.len());
+            exact.fgd(mu, alpha, eta, kappa)
+        })
+        .collect();
+    let images = FgdImages::for_variant(gpu, Fgd::Belcour, G2_FORM)?;
+    let input: Vec<[f32; 4]> = cells.iter().map(|c| c.map(|v| v as f32)).collect();
+    let shipped = FgdProbe::new(gpu, Fgd::Belcour)?.sample(split, &images, &input)?;
+    let rows = |value: &dyn Fn(usize) -> f64| -> Vec<Vec<f64>> {
+        (0..n as usize)
+            .map(|y| {
+                (0..n as usize)
+                    .map(|x| {
+                        let i = y * n as usize + x;
+                        (value(i) - truth[i]).abs()
+                    })
+                    .collect()
+            })
+            .collect()
+    };
+    Ok(vec![
+        (
+            "basis only".into(),
+            rows(&|i| belcour_unguarded(table, cells[i])),
+        ),
+        (
+            "fgd=belcour (η < 1: table)".into(),
+            rows(&|i| f64::from(shipped[i])),
+        ),
+    ])
+}
+
+/// A 4-D grid's texels (`slices` κ slices of them) in the reference's file format
+/// (ALGORITHMS.md §6): int32 sizes, (f32 min, f32 max) per axis, then the f32 values, first
+/// axis fastest.
+pub fn grid_file_bytes(grid: &Grid, texels: &[f32], slices: u32) -> Vec<u8> {
+    let mut out = Vec::with_capacity(48 + texels.len() * 4);
+    let [nm, na, ne, _] = grid.dims;
+    for n in [nm, na, ne, slices] {
+        out.extend((n as i32).to_le_bytes());
+    }
+    for (lo, hi) in [(0.0, 1.0), (0.0, 1.0), grid.eta, grid.kappa] {
+        out.extend((lo as f32).to_le_bytes());
+        out.extend((hi as f32).to_le_bytes());
+    }
+    for v in texels {
+        out.extend(v.to_le_bytes());
+    }
+    out
 }

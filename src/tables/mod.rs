@@ -9,7 +9,9 @@ pub mod environment;
 pub mod fgd;
 pub mod fgd_study;
 pub mod split_sum;
+pub mod spot;
 pub mod tir;
+pub mod tir_study;
 
 /// Work-group edge of lamina's 2-D compute passes (reaches GLSL as `LAMINA_LOCAL_SIZE_2D`).
 pub const LOCAL_SIZE_2D: u32 = 8;
