@@ -143,6 +143,14 @@ fn instructions_ratio(run: &Run, base: Option<&Run>) -> Option<f64> {
     Some(run.instructions? as f64 / base?.instructions? as f64)
 }
 
+/// Collects the studies under `roots` ([`collect`]) and writes their report to `out`
+/// atomically; returns how many studies it holds.
+pub fn write(roots: &[PathBuf], out: &Path) -> Result<usize> {
+    let studies = collect(roots)?;
+    crate::imageio::write_file_atomically(out, render(&studies, out))?;
+    Ok(studies.len())
+}
+
 /// The report's Markdown; `out` is where it will be written (links are relative to it).
 pub fn render(studies: &[StudyDir], out: &Path) -> String {
     let out_dir = out.parent().unwrap_or(Path::new("."));

@@ -45,6 +45,8 @@ use crate::size::Size;
 use super::bench::Case;
 use super::counter::CounterSetup;
 
+/// Resolution of the counted draw when instructions are counted without a `counter_size`.
+pub const DEFAULT_COUNTER_SIZE: (u32, u32) = (48, 48);
 /// The pseudo-axes a sweep adds to the variant axes.
 pub const EXTRA_AXES: [&str; 2] = ["active_layers", "material"];
 
@@ -111,6 +113,24 @@ pub struct Study {
     pub skipped: Vec<String>,
     pub published: Vec<Published>,
     pub fit: bool,
+}
+
+impl Study {
+    /// Counts instructions too (`--counter instructions`): at the study's own counter size
+    /// when it counts already, else at [`DEFAULT_COUNTER_SIZE`].
+    pub fn count_instructions(&mut self) {
+        self.counter.get_or_insert(DEFAULT_COUNTER_SIZE);
+    }
+}
+
+/// Where a study's files go under `out`: `out` itself for a lone study, `out/NAME` for each
+/// study of a suite.
+pub fn output_dir(out: &Path, study: &Study, suite: bool) -> PathBuf {
+    if suite {
+        out.join(&study.name)
+    } else {
+        out.to_owned()
+    }
 }
 
 /// One case of a study with its value on every swept axis (in axis order).
@@ -262,14 +282,10 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
     let warmup = over.warmup.or(sweep.warmup).unwrap_or(2);
     let counter = match over.counter.as_deref().or(sweep.counter.as_deref()) {
         None | Some("none") => None,
-        Some("instructions") => {
-            let text = over
-                .counter_size
-                .clone()
-                .or_else(|| sweep.counter_size.clone())
-                .unwrap_or_else(|| "48x48".into());
-            Some(parse_size(file, "counter_size", &text)?)
-        }
+        Some("instructions") => match over.counter_size.as_ref().or(sweep.counter_size.as_ref()) {
+            Some(text) => Some(parse_size(file, "counter_size", text)?),
+            None => Some(DEFAULT_COUNTER_SIZE),
+        },
         Some(other) => {
             return Err(bad(
                 file,
@@ -578,7 +594,7 @@ pub fn write(
     let results_json = serde_json::to_string_pretty(results).expect("results serialise");
     let meta_json = serde_json::to_string_pretty(meta).expect("study metadata serialises");
     write_file_atomically(&dir.join("results.json"), &results_json)?;
-    write_file_atomically(&dir.join("results.csv"), &results.csv())?;
+    write_file_atomically(&dir.join("results.csv"), results.csv())?;
     write_file_atomically(&dir.join("study.json"), &meta_json)?;
     write_file_atomically(&dir.join("sweep.toml"), &study.source_text)?;
     let mut charts = Vec::new();

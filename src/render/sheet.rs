@@ -4,6 +4,7 @@
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::imageio::{tonemap, HdrImage};
+use crate::material::{base_variant, presets, Stack};
 use crate::model::LayerParams;
 use crate::shader::VariantKey;
 use crate::tables::environment::EnvDesc;
@@ -18,6 +19,33 @@ pub struct SheetRow {
 
 /// Gap between tiles, in pixels.
 const GAP: usize = 4;
+
+/// The columns when none are asked for: every preset in each model.
+pub const DEFAULT_COLUMNS: [&str; 2] = ["model=tm2", "model=tm6"];
+
+/// One row per preset material (`assets/materials/`), in the presets' order.
+pub fn preset_rows() -> Result<Vec<SheetRow>> {
+    presets()
+        .iter()
+        .map(|path| {
+            let stack = Stack::load(path)?;
+            Ok(SheetRow {
+                name: stack.name,
+                layers: stack.layers,
+            })
+        })
+        .collect()
+}
+
+/// The variants `keys` name, one column each: axes a key leaves out come from
+/// [`base_variant`] with the default model, deep enough for every row.
+pub fn columns(rows: &[SheetRow], keys: &[&str]) -> Result<Vec<VariantKey>> {
+    let deepest = rows.iter().map(|r| r.layers.len()).max().unwrap_or(1);
+    let base = base_variant(VariantKey::default().model, deepest);
+    keys.iter()
+        .map(|k| Ok(VariantKey::parse_over(k, base)?))
+        .collect()
+}
 
 /// Renders each row in each variant at `tile`² pixels and returns the sheet as 8-bit RGBA
 /// (width, height, pixels). Fails on the first non-finite pixel, naming row and variant.
