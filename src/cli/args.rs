@@ -1,0 +1,56 @@
+//! Argument types several commands share: what `render` and `view` take to set up a scene
+//! (flattened into both), the environment map of the timing commands, the instruction counter,
+//! and the checks of numeric arguments.
+
+use std::marker::PhantomData;
+use std::path::PathBuf;
+
+use lamina::Size;
+
+/// What a command that shows one material sets up: the material, its variant, the
+/// environment and the image size. The defaults and help that differ between commands come
+/// from `D`.
+#[derive(clap::Args)]
+pub struct SceneArgs<D: SceneDefaults> {
+    #[arg(long, default_value = D::SIZE, value_name = "WxH", help = D::SIZE_HELP)]
+    pub size: Size,
+    #[arg(long, value_name = "FILE", default_value = "assets/env/studio.exr", help = D::ENV_HELP)]
+    pub env: PathBuf,
+    /// Material file or preset name (see assets/materials/).
+    #[arg(long, value_name = "FILE|PRESET", default_value = "gold")]
+    pub material: String,
+    #[arg(long, value_name = "KEY", help = D::VARIANT_HELP)]
+    pub variant: Option<String>,
+    #[arg(skip)]
+    defaults: PhantomData<D>,
+}
+
+/// The defaults and help of [`SceneArgs`] for one command.
+pub trait SceneDefaults: Send + Sync + 'static {
+    const SIZE: &'static str;
+    const SIZE_HELP: &'static str;
+    const ENV_HELP: &'static str;
+    const VARIANT_HELP: &'static str;
+}
+
+/// The environment map of the commands that render many frames.
+#[derive(clap::Args)]
+pub struct EnvArg {
+    /// Equirectangular OpenEXR environment map.
+    #[arg(long, value_name = "FILE", default_value = "assets/env/studio.exr")]
+    pub env: PathBuf,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum CounterArg {
+    /// Instructions executed by lavapipe while it runs the shaded draw (valgrind callgrind).
+    Instructions,
+}
+
+/// `--fail-above PCT`: a finite percentage ≥ 0.
+pub fn percent(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+        _ => Err(format!("`{text}` is not a percentage ≥ 0")),
+    }
+}

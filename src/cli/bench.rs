@@ -1,0 +1,104 @@
+//! `lamina bench`: variants of the shaded draw timed interleaved against the ggx baseline
+//! (`lamina::profile::bench`), optionally with instruction counts; a table, JSON and CSV.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use lamina::imageio;
+use lamina::material::Stack;
+use lamina::profile::bench::{self, BenchConfig, Case};
+use lamina::profile::counter::{self, CounterSetup};
+use lamina::Size;
+
+use super::args::{CounterArg, EnvArg};
+use super::{asset_path, check_validation, follow, progress_bar, GlobalArgs};
+
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// A variant to time (repeat the flag); axes not given come from the defaults and the
+    /// material. The ggx baseline is added when absent.
+    #[arg(long = "variant", value_name = "KEY", required = true)]
+    variants: Vec<String>,
+    /// Material file or preset name.
+    #[arg(long, value_name = "FILE|PRESET", default_value = "varnished-gold")]
+    material: String,
+    #[arg(long, default_value = "640x360", value_name = "WxH")]
+    size: Size,
+    /// Measured frames per variant.
+    #[arg(long, default_value_t = 20, value_name = "N")]
+    frames: u32,
+    /// Frames per variant rendered first and discarded.
+    #[arg(long, default_value_t = 2, value_name = "N")]
+    warmup: u32,
+    #[command(flatten)]
+    env: EnvArg,
+    /// Write the results as JSON.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+    /// Write the results as CSV.
+    #[arg(long, value_name = "FILE")]
+    csv: Option<PathBuf>,
+    /// Also count each variant's instructions under callgrind (lavapipe only).
+    #[arg(long, value_enum)]
+    counter: Option<CounterArg>,
+    /// Resolution of the counted draw (instructions grow with covered pixels).
+    #[arg(long, default_value = "48x48", value_name = "WxH")]
+    counter_size: Size,
+}
+
+pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
+    if args.frames == 0 {
+        anyhow::bail!("--frames 0: at least one measured frame is needed");
+    }
+    let env_path = asset_path(&args.env.env);
+    let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
+    let stack = Stack::resolve(&args.material)?;
+    let cases = args
+        .variants
+        .iter()
+        .map(|k| {
+            Ok(Case {
+                variant: stack.variant(Some(k))?,
+                stack: stack.clone(),
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let gpu = global.open_gpu()?;
+    let config = BenchConfig {
+        cases,
+        width: args.size.width,
+        height: args.size.height,
+        frames: args.frames,
+        warmup: args.warmup,
+    };
+    let bar = progress_bar("frames");
+    let mut results = bench::run(&gpu, &equirect, &config, follow(&bar))?;
+    bar.finish_and_clear();
+    check_validation(&gpu)?;
+    if args.counter.is_some() {
+        let setup = CounterSetup::for_device(&gpu, &env_path)?;
+        let bar = progress_bar("counted (callgrind)");
+        let size = (args.counter_size.width, args.counter_size.height);
+        counter::add_counts(
+            &mut results,
+            &setup,
+            &config.with_baselines(),
+            size,
+            |done, total| {
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            },
+        )?;
+        bar.finish_and_clear();
+    }
+    print!("{}", results.table());
+    if let Some(path) = &args.json {
+        imageio::write_file_atomically(path, serde_json::to_string_pretty(&results)?)?;
+        println!("wrote {}", path.display());
+    }
+    if let Some(path) = &args.csv {
+        imageio::write_file_atomically(path, results.csv())?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,29 @@
+//! `lamina count-worker` (hidden): the side of the instruction counter that runs under
+//! callgrind (`lamina::profile::counter`), started by `--counter instructions`.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use lamina::imageio;
+use lamina::profile::counter::{self, WorkerJob};
+use lamina::Size;
+
+use super::{check_validation, GlobalArgs};
+
+#[derive(clap::Args)]
+pub struct CountWorkerArgs {
+    #[arg(long, value_name = "FILE")]
+    job: PathBuf,
+    #[arg(long, value_name = "FILE")]
+    env: PathBuf,
+    #[arg(long, value_name = "WxH")]
+    size: Size,
+}
+
+pub fn run(global: &GlobalArgs, args: &CountWorkerArgs) -> Result<()> {
+    let cases = WorkerJob::read_cases(&args.job)?;
+    let equirect = imageio::read_exr(&args.env).context("reading the environment map")?;
+    let gpu = global.open_gpu()?;
+    counter::worker(&gpu, &equirect, &cases, args.size.width, args.size.height)?;
+    check_validation(&gpu)
+}

@@ -1,0 +1,175 @@
+//! The command line's layer over the library (DESIGN.md §3): the commands and their flags,
+//! argument checks, and printing — nothing else. Every rule a command applies lives in the
+//! library, where the sweep, the viewer and the tests reach it too.
+//!
+//! One file per command, each with its `…Args` and a `run`; [`args`] holds the argument types
+//! several commands share; this file holds the global flags, the dispatch and the helpers every
+//! command uses (opening the device, the validation check, progress bars, asset paths).
+
+mod args;
+mod bench;
+mod count_worker;
+mod devices;
+mod diff;
+mod eval;
+mod furnace;
+mod render;
+mod report;
+mod sheet;
+mod sweep;
+mod tables;
+mod view;
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use lamina::vk::{DeviceSelector, InstanceDesc};
+use lamina::Gpu;
+
+#[derive(Parser)]
+#[command(
+    name = "lamina",
+    version,
+    about = "Transfer-matrix layered materials on Vulkan, measured"
+)]
+pub struct Cli {
+    #[command(flatten)]
+    global: GlobalArgs,
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// The flags every command takes.
+#[derive(clap::Args)]
+struct GlobalArgs {
+    /// Vulkan device: index (see `lamina devices`) or part of its name.
+    #[arg(long, global = true, value_name = "INDEX|NAME")]
+    device: Option<DeviceSelector>,
+    /// Enable the Khronos validation layer.
+    #[arg(long, global = true)]
+    validation: bool,
+    /// Enable synchronization validation too (implies --validation).
+    #[arg(long, global = true)]
+    sync_validation: bool,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// List Vulkan devices and the features lamina uses.
+    Devices,
+    /// Render the sphere under an environment to EXR and PNG, and print the GPU time.
+    Render(render::RenderArgs),
+    /// Evaluate a material's model at view cosines: total R, T and the lobes.
+    Eval(eval::EvalArgs),
+    /// White-furnace test: reflected energy per view angle under a uniform white environment.
+    Furnace(furnace::FurnaceArgs),
+    /// Render every preset material in each variant into one tiled PNG.
+    Sheet(sheet::SheetArgs),
+    /// Interactive viewer: edit the layer stack, switch variants, watch the GPU time.
+    View(view::ViewArgs),
+    /// Time variants of the shaded draw, interleaved, against the ggx baseline.
+    Bench(bench::BenchArgs),
+    /// Run a sweep file (profiling/sweeps/*.toml): results.json, results.csv and charts per study.
+    Sweep(sweep::SweepArgs),
+    /// Write profiling/REPORT.md from sweep results, beside the talk's published figures.
+    Report(report::ReportArgs),
+    /// Compare two sets of results (commits, drivers, devices): time as each run's ratio to its
+    /// ggx baseline, JIT instruction counts as they are.
+    Diff(diff::DiffArgs),
+    /// Build a precomputed table (or load it from the cache), print its statistics and error
+    /// studies.
+    Tables(tables::TablesArgs),
+    /// Internal: counts instructions of shaded draws; runs under callgrind, started by
+    /// `--counter instructions`.
+    #[command(hide = true)]
+    CountWorker(count_worker::CountWorkerArgs),
+}
+
+/// Runs the command the line names.
+pub fn run(cli: &Cli) -> Result<()> {
+    let global = &cli.global;
+    match &cli.command {
+        Command::Devices => devices::run(global),
+        Command::Render(args) => render::run(global, args),
+        Command::Eval(args) => eval::run(global, args),
+        Command::Furnace(args) => furnace::run(global, args),
+        Command::Sheet(args) => sheet::run(global, args),
+        Command::View(args) => view::run(global, args),
+        Command::Bench(args) => bench::run(global, args),
+        Command::Sweep(args) => sweep::run(global, args),
+        Command::Report(args) => report::run(args),
+        Command::Diff(args) => diff::run(args),
+        Command::Tables(args) => tables::run(global, args),
+        Command::CountWorker(args) => count_worker::run(global, args),
+    }
+}
+
+impl GlobalArgs {
+    /// The instance the flags ask for; `surface` for a window.
+    fn instance(&self, surface: bool) -> InstanceDesc {
+        InstanceDesc {
+            validation: self.validation,
+            sync_validation: self.sync_validation,
+            surface,
+        }
+    }
+
+    fn selector(&self) -> DeviceSelector {
+        self.device.clone().unwrap_or_default()
+    }
+
+    /// The device the flags select, headless.
+    fn open_gpu(&self) -> Result<Gpu> {
+        Ok(Gpu::new(self.instance(false), &self.selector())?)
+    }
+}
+
+/// Fails when the validation layer reported anything over the run.
+fn check_validation(gpu: &Gpu) -> Result<()> {
+    let problems = gpu.device.validation_problems();
+    if problems > 0 {
+        anyhow::bail!(
+            "the validation layer reported {problems} problem(s); see the messages above"
+        );
+    }
+    Ok(())
+}
+
+/// A progress bar on stderr (hidden when stderr is not a terminal).
+fn progress_bar(what: &str) -> ProgressBar {
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template("{prefix:>28} [{bar:30}] {pos}/{len} {msg} ({elapsed})")
+            .expect("a valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_prefix(what.to_owned());
+    bar
+}
+
+/// `progress(done, total)` for the library's long runs, drawn on `bar`.
+fn follow(bar: &ProgressBar) -> impl FnMut(u32, u32) + '_ {
+    |done, total| {
+        bar.set_length(u64::from(total));
+        bar.set_position(u64::from(done));
+    }
+}
+
+/// A relative asset path that does not exist under the working directory is looked up in the
+/// source tree the binary was built from, so `lamina render` works from any directory.
+fn asset_path(path: &Path) -> PathBuf {
+    if path.is_relative() && !path.exists() {
+        let in_tree = Path::new(env!("CARGO_MANIFEST_DIR")).join(path);
+        if in_tree.exists() {
+            return in_tree;
+        }
+    }
+    path.to_owned()
+}
+
+/// `1 study`, `2 studies`.
+fn studies(n: usize) -> String {
+    format!("{n} stud{}", if n == 1 { "y" } else { "ies" })
+}

@@ -1,0 +1,109 @@
+//! `lamina render`: the sphere under an environment, to EXR and PNG, with the GPU time of the
+//! shaded draw. Nothing is written when a pixel is not finite or the validation layer spoke.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use lamina::imageio;
+use lamina::material::resolve_with_variant;
+use lamina::render::Renderer;
+use lamina::tables::environment::EnvDesc;
+
+use super::args::{SceneArgs, SceneDefaults};
+use super::{asset_path, GlobalArgs};
+
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs<RenderScene>,
+    /// Linear HDR output (RGBA half).
+    #[arg(long, value_name = "FILE.exr", default_value = "out/render.exr")]
+    out: PathBuf,
+    /// Tone-mapped PNG output.
+    #[arg(long, value_name = "FILE.png", default_value = "out/render.png")]
+    png: PathBuf,
+    /// Frames rendered and discarded before the measured one (the first frame on lavapipe
+    /// includes the shader's JIT compilation).
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    warmup: u32,
+    /// Exposure of the PNG, in stops.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+}
+
+pub struct RenderScene;
+
+impl SceneDefaults for RenderScene {
+    const SIZE: &'static str = "640x360";
+    const SIZE_HELP: &'static str = "Image size";
+    const ENV_HELP: &'static str = "Equirectangular OpenEXR environment map";
+    const VARIANT_HELP: &'static str = "Shader variant, e.g. `model=ggx,fp16=on`; axes not given \
+        take their defaults, with the model from the material file";
+}
+
+pub fn run(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
+    let scene = &args.scene;
+    let env_path = asset_path(&scene.env);
+    let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
+    let (stack, variant) = resolve_with_variant(&scene.material, scene.variant.as_deref())?;
+    let layers = stack.params();
+    let gpu = global.open_gpu()?;
+    let mut renderer = Renderer::new(&gpu, &equirect, EnvDesc::default())?;
+    let pass = renderer.prepare(variant)?;
+    let (width, height) = (scene.size.width, scene.size.height);
+    for _ in 0..args.warmup {
+        renderer.render(&pass, &layers, width, height)?;
+    }
+    let frame = renderer.render(&pass, &layers, width, height)?;
+    if let Some(i) = frame
+        .pixels
+        .iter()
+        .position(|p| p.iter().any(|c| !c.is_finite()))
+    {
+        anyhow::bail!(
+            "the render has a non-finite pixel at ({}, {}); nothing was written",
+            i as u32 % frame.width,
+            i as u32 / frame.width
+        );
+    }
+    let problems = gpu.device.validation_problems();
+    if problems > 0 {
+        anyhow::bail!("the validation layer reported {problems} problem(s); see the messages above; nothing was written");
+    }
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    imageio::write_exr_rgba16f(&args.out, w, h, &frame.pixels)?;
+    imageio::write_png_tonemapped(&args.png, w, h, &frame.pixels, args.exposure)?;
+
+    println!(
+        "device:      {} ({})",
+        gpu.device.report.name, gpu.device.report.driver_info
+    );
+    println!("environment: {}", env_path.display());
+    println!(
+        "material:    {} ({} layers)",
+        stack.name,
+        stack.layers.len()
+    );
+    println!("variant:     {variant}");
+    println!(
+        "size:        {}x{} (measured after {} warm-up frame(s))",
+        frame.width, frame.height, args.warmup
+    );
+    let invocations = |n: Option<u64>| n.map_or("n/a".to_string(), |n| n.to_string());
+    println!(
+        "shaded draw: {:.3} ms GPU, {} fragment invocations",
+        frame.shaded.duration.as_ms(),
+        invocations(frame.shaded.fragment_invocations)
+    );
+    println!(
+        "sky draw:    {:.3} ms GPU, {} fragment invocations",
+        frame.sky.duration.as_ms(),
+        invocations(frame.sky.fragment_invocations)
+    );
+    println!(
+        "wrote:       {}, {}",
+        args.out.display(),
+        args.png.display()
+    );
+    Ok(())
+}

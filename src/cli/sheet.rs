@@ -1,0 +1,61 @@
+//! `lamina sheet`: every preset in each variant, tiled into one PNG
+//! (`lamina::render::sheet`).
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use lamina::imageio;
+use lamina::render::sheet;
+
+use super::args::EnvArg;
+use super::{asset_path, check_validation, GlobalArgs};
+
+#[derive(clap::Args)]
+pub struct SheetArgs {
+    /// Variants, one column each (default: model=tm2 and model=tm6).
+    #[arg(long = "variant", value_name = "KEY")]
+    variants: Vec<String>,
+    /// Side of one tile in pixels.
+    #[arg(long, default_value_t = 256, value_name = "PIXELS")]
+    tile: u32,
+    #[command(flatten)]
+    env: EnvArg,
+    #[arg(long, value_name = "FILE.png", default_value = "out/sheet.png")]
+    out: PathBuf,
+    /// Exposure of the PNG, in stops.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+}
+
+pub fn run(global: &GlobalArgs, args: &SheetArgs) -> Result<()> {
+    let env_path = asset_path(&args.env.env);
+    let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
+    let keys: Vec<&str> = if args.variants.is_empty() {
+        sheet::DEFAULT_COLUMNS.to_vec()
+    } else {
+        args.variants.iter().map(String::as_str).collect()
+    };
+    let rows = sheet::preset_rows()?;
+    let variants = sheet::columns(&rows, &keys)?;
+    let gpu = global.open_gpu()?;
+    let (w, h, rgba) = sheet::render(&gpu, &equirect, &rows, &variants, args.tile, args.exposure)?;
+    check_validation(&gpu)?;
+    imageio::write_png(&args.out, w, h, &rgba)?;
+    println!(
+        "rows (top to bottom): {}",
+        rows.iter()
+            .map(|r| r.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    println!(
+        "columns: {}",
+        variants
+            .iter()
+            .map(|v| v.to_string())
+            .collect::<Vec<_>>()
+            .join(" | ")
+    );
+    println!("wrote {}", args.out.display());
+    Ok(())
+}

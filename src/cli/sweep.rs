@@ -1,0 +1,122 @@
+//! `lamina sweep`: a study file or a suite (`lamina::profile::sweep`) — its cases listed, run
+//! interleaved, written as results, charts and a report.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use lamina::imageio;
+use lamina::profile::counter::CounterSetup;
+use lamina::profile::{report, sweep};
+
+use super::args::{CounterArg, EnvArg};
+use super::{asset_path, check_validation, progress_bar, studies, GlobalArgs};
+
+#[derive(clap::Args)]
+pub struct SweepArgs {
+    /// A study or a suite (`studies = [...]`), e.g. profiling/sweeps/reproduce.toml.
+    file: PathBuf,
+    /// Output directory: results of one study go here, a suite's in one sub-directory per study.
+    #[arg(long, value_name = "DIR", default_value = "out/sweep")]
+    out: PathBuf,
+    /// Count instructions too (overrides the sweep file's `counter`).
+    #[arg(long, value_enum)]
+    counter: Option<CounterArg>,
+    #[command(flatten)]
+    env: EnvArg,
+    /// Check and expand the file, print the cases, and stop before any GPU work.
+    #[arg(long)]
+    dry_run: bool,
+}
+
+pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
+    let (mut list, suite) = sweep::load(&args.file)?;
+    if let Some(CounterArg::Instructions) = args.counter {
+        list.iter_mut().for_each(sweep::Study::count_instructions);
+    }
+    let dir_of = |s: &sweep::Study| sweep::output_dir(&args.out, s, suite);
+    print_plan(args, &list, &dir_of);
+    if args.dry_run {
+        for s in &list {
+            println!("{}:", s.name);
+            for p in &s.points {
+                println!("  {} | {}", p.case.variant, p.case.stack.name);
+            }
+        }
+        return Ok(());
+    }
+    let env_path = asset_path(&args.env.env);
+    let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
+    let gpu = global.open_gpu()?;
+    let setup = if list.iter().any(|s| s.counter.is_some()) {
+        Some(CounterSetup::for_device(&gpu, &env_path)?)
+    } else {
+        None
+    };
+    let started = std::time::Instant::now();
+    let mut written = Vec::new();
+    for (k, study) in list.iter().enumerate() {
+        let bar = progress_bar(&format!("[{}/{}] {}", k + 1, list.len(), study.name));
+        let (results, meta) = sweep::run(
+            &gpu,
+            &equirect,
+            study,
+            setup.as_ref(),
+            |what, done, total| {
+                bar.set_message(what.to_owned());
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            },
+        )?;
+        bar.finish_and_clear();
+        check_validation(&gpu)?;
+        let dir = dir_of(study);
+        let charts = sweep::write(&dir, study, &results, &meta)?;
+        println!("\n== {} ({})", study.title, study.name);
+        print!("{}", results.table());
+        println!(
+            "wrote {}/results.json, results.csv, {} chart(s)",
+            dir.display(),
+            charts.len()
+        );
+        written.push(dir);
+    }
+    let report_path = args.out.join("REPORT.md");
+    report::write(&written, &report_path)?;
+    println!(
+        "\n{} in {:.0} s; report: {}",
+        studies(list.len()),
+        started.elapsed().as_secs_f64(),
+        report_path.display()
+    );
+    Ok(())
+}
+
+/// The studies and their cases, before anything runs.
+fn print_plan(args: &SweepArgs, list: &[sweep::Study], dir_of: &dyn Fn(&sweep::Study) -> PathBuf) {
+    let cases: usize = list.iter().map(|s| s.points.len()).sum();
+    println!(
+        "{}: {}, {cases} case(s) (+ ggx baselines)",
+        args.file.display(),
+        studies(list.len())
+    );
+    for s in list {
+        println!(
+            "  {:<22} {:>3} case(s) at {}x{}, {}+{} frames{}{}  -> {}",
+            s.name,
+            s.points.len(),
+            s.width,
+            s.height,
+            s.warmup,
+            s.frames,
+            s.counter
+                .map(|(w, h)| format!(", instructions at {w}x{h}"))
+                .unwrap_or_default(),
+            if s.skipped.is_empty() {
+                String::new()
+            } else {
+                format!(", {} skipped (stack > max_layers)", s.skipped.len())
+            },
+            dir_of(s).display()
+        );
+    }
+}
