@@ -3,6 +3,7 @@
 //! Every output is written to a temporary file beside the target and renamed into place, so a
 //! failed or interrupted run never leaves a partial file under the requested name.
 
+use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
 
 use half::f16;
@@ -147,6 +148,23 @@ fn srgb_encode(x: f32) -> f32 {
     }
 }
 
+/// The exposures the tone mapper is asked for, in stops. Half-float radiance spans
+/// 2⁻²⁴ … 2¹⁶, so past 24 stops either way every pixel is black or white; NaN and the
+/// infinities are outside too.
+pub const EXPOSURE_RANGE_EV: RangeInclusive<f32> = -24.0..=24.0;
+
+/// Errs, naming the allowed range, unless `exposure_ev` is in [`EXPOSURE_RANGE_EV`].
+pub fn check_exposure(exposure_ev: f32) -> Result<()> {
+    if EXPOSURE_RANGE_EV.contains(&exposure_ev) {
+        return Ok(());
+    }
+    Err(Error::Unsupported(format!(
+        "exposure {exposure_ev}: allowed: a number of stops in {}..={}",
+        EXPOSURE_RANGE_EV.start(),
+        EXPOSURE_RANGE_EV.end()
+    )))
+}
+
 /// Tone-maps linear radiance to 8-bit sRGB: exposure (in stops), ACES fit, sRGB encoding.
 pub fn tonemap(pixels: &[[f16; 4]], exposure_ev: f32) -> Vec<u8> {
     let scale = exposure_ev.exp2();
@@ -159,7 +177,8 @@ pub fn tonemap(pixels: &[[f16; 4]], exposure_ev: f32) -> Vec<u8> {
         .collect()
 }
 
-/// Writes a tone-mapped PNG of RGBA half-float pixels.
+/// Writes a tone-mapped PNG of RGBA half-float pixels; errs on an exposure outside
+/// [`EXPOSURE_RANGE_EV`] before writing anything.
 pub fn write_png_tonemapped(
     path: &Path,
     width: usize,
@@ -167,6 +186,7 @@ pub fn write_png_tonemapped(
     pixels: &[[f16; 4]],
     exposure_ev: f32,
 ) -> Result<()> {
+    check_exposure(exposure_ev)?;
     let rgba = tonemap(pixels, exposure_ev);
     write_png(path, width, height, &rgba)
 }
@@ -248,6 +268,17 @@ mod tests {
         assert!(r.is_err());
         assert!(!path.exists());
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn exposures_outside_the_range_are_refused_before_writing() {
+        let path = temp_dir("exposure").join("never.png");
+        for ev in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 24.5, -25.0] {
+            let e = write_png_tonemapped(&path, 1, 1, &[[f16::ONE; 4]], ev).unwrap_err();
+            assert!(e.to_string().contains("-24..=24"), "{e}");
+        }
+        assert!(!path.exists());
+        assert!(check_exposure(24.0).is_ok() && check_exposure(-24.0).is_ok());
     }
 
     #[test]

@@ -123,6 +123,29 @@ fn zero_and_malformed_sizes_are_named() {
 }
 
 #[test]
+fn non_finite_and_out_of_range_exposures_are_refused() {
+    let dir = common::scratch_dir("cli-exposure");
+    for ev in ["nan", "inf", "NaN", "1e9", "25"] {
+        assert_rejected(&["--exposure", ev], &dir, &["--exposure", "-24..=24"]);
+    }
+    let out = lamina(
+        &[
+            "sheet",
+            "--exposure",
+            "nan",
+            "--tile",
+            "8",
+            "--out",
+            "s.png",
+        ],
+        &dir,
+    );
+    assert!(!out.status.success(), "sheet --exposure nan succeeded");
+    assert!(stderr(&out).contains("--exposure"), "{}", stderr(&out));
+    assert!(!dir.join("s.png").exists());
+}
+
+#[test]
 fn bad_material_file_is_named() {
     let dir = common::scratch_dir("cli-bad-material");
     let input = common::scratch_dir("cli-bad-material-input").join("typo.toml");

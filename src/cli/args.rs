@@ -1,10 +1,12 @@
 //! Argument types several commands share: what `render` and `view` take to set up a scene
 //! (flattened into both), the environment map of the timing commands, the instruction counter,
-//! and the checks of numeric arguments.
+//! and the checks of numeric arguments — each value finite and inside a documented range,
+//! refused with the flag and the range named.
 
 use std::marker::PhantomData;
 use std::path::PathBuf;
 
+use lamina::imageio;
 use lamina::Size;
 
 /// What a command that shows one material sets up: the material, its variant, the
@@ -45,6 +47,15 @@ pub struct EnvArg {
 pub enum CounterArg {
     /// Instructions executed by lavapipe while it runs the shaded draw (valgrind callgrind).
     Instructions,
+}
+
+/// `--exposure EV`: a number of stops in [`imageio::EXPOSURE_RANGE_EV`].
+pub fn exposure(text: &str) -> Result<f32, String> {
+    let ev = text
+        .parse::<f32>()
+        .map_err(|_| format!("`{text}` is not a number of stops"))?;
+    imageio::check_exposure(ev).map_err(|e| e.to_string())?;
+    Ok(ev)
 }
 
 /// `--fail-above PCT`: a finite percentage ≥ 0.

@@ -9,7 +9,7 @@ use lamina::material::resolve_with_variant;
 use lamina::render::Renderer;
 use lamina::tables::environment::EnvDesc;
 
-use super::args::{SceneArgs, SceneDefaults};
+use super::args::{self, SceneArgs, SceneDefaults};
 use super::{asset_path, GlobalArgs};
 
 #[derive(clap::Args)]
@@ -26,8 +26,8 @@ pub struct RenderArgs {
     /// includes the shader's JIT compilation).
     #[arg(long, default_value_t = 1, value_name = "N")]
     warmup: u32,
-    /// Exposure of the PNG, in stops.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    /// Exposure of the PNG, in stops (-24 to 24).
+    #[arg(long, default_value = "0", allow_negative_numbers = true, value_parser = args::exposure)]
     exposure: f32,
 }
 

@@ -6,8 +6,9 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use lamina::imageio;
 use lamina::render::sheet;
+use lamina::Size;
 
-use super::args::EnvArg;
+use super::args::{self, EnvArg};
 use super::{asset_path, check_validation, GlobalArgs};
 
 #[derive(clap::Args)]
@@ -15,15 +16,20 @@ pub struct SheetArgs {
     /// Variants, one column each (default: model=tm2 and model=tm6).
     #[arg(long = "variant", value_name = "KEY")]
     variants: Vec<String>,
-    /// Side of one tile in pixels.
-    #[arg(long, default_value_t = 256, value_name = "PIXELS")]
+    /// Side of one tile in pixels (1 to 16384).
+    #[arg(
+        long,
+        default_value_t = 256,
+        value_name = "PIXELS",
+        value_parser = clap::value_parser!(u32).range(1..=i64::from(Size::MAX_SIDE))
+    )]
     tile: u32,
     #[command(flatten)]
     env: EnvArg,
     #[arg(long, value_name = "FILE.png", default_value = "out/sheet.png")]
     out: PathBuf,
-    /// Exposure of the PNG, in stops.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    /// Exposure of the PNG, in stops (-24 to 24).
+    #[arg(long, default_value = "0", allow_negative_numbers = true, value_parser = args::exposure)]
     exposure: f32,
 }
 

@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
-use crate::imageio::{tonemap, HdrImage};
+use crate::imageio::{check_exposure, tonemap, HdrImage};
 use crate::material::{base_variant, presets, Stack};
 use crate::model::LayerParams;
 use crate::shader::VariantKey;
@@ -48,7 +48,10 @@ pub fn columns(rows: &[SheetRow], keys: &[&str]) -> Result<Vec<VariantKey>> {
 }
 
 /// Renders each row in each variant at `tile`² pixels and returns the sheet as 8-bit RGBA
-/// (width, height, pixels). Fails on the first non-finite pixel, naming row and variant.
+/// (width, height, pixels). Fails on an exposure outside [`EXPOSURE_RANGE_EV`] before any
+/// work, and on the first non-finite pixel, naming row and variant.
+///
+/// [`EXPOSURE_RANGE_EV`]: crate::imageio::EXPOSURE_RANGE_EV
 pub fn render(
     gpu: &Gpu,
     equirect: &HdrImage,
@@ -57,6 +60,7 @@ pub fn render(
     tile: u32,
     exposure_ev: f32,
 ) -> Result<(usize, usize, Vec<u8>)> {
+    check_exposure(exposure_ev)?;
     let mut renderer = Renderer::new(gpu, equirect, EnvDesc::default())?;
     let passes = variants
         .iter()
