@@ -3,16 +3,20 @@
 //! Module map (DESIGN.md §3):
 //! - [`vk`] — the only module with raw `ash` — instance, device, memory, pipelines, queries;
 //! - [`shader`] — GLSL → SPIR-V with shaderc, and the typed variant key;
-//! - [`tables`] — GPU-built tables (prefiltered environment, split-sum) with CPU references;
+//! - [`tables`] — GPU-built tables (prefiltered environment, split-sum, FGD, TIR) with CPU
+//!   references, their spot checks and error studies;
 //! - [`render`] — passes (sky, shaded sphere), the scene and readback;
 //! - [`model`] — the CPU reference in f64;
 //! - [`oracle`] — the CPU reference for a variant (`eval --backend cpu`, the furnace);
-//! - [`material`] — layers;
+//! - [`material`] — layer stacks, and the variant a stack is shaded with;
 //! - [`imageio`] — EXR/PNG input and atomic output;
 //! - [`size`] — `WxH` image sizes, one limit for the command line and the sweep files;
 //! - [`output`] — the JSON and tables commands print;
 //! - [`profile`] — the bench runner, statistics, result files;
 //! - [`viewer`] — the interactive window (winit + egui).
+//!
+//! The `lamina` binary (`src/main.rs`, `src/cli/`) only parses, checks arguments and prints:
+//! every rule a command applies is here, where the sweep, the viewer and the tests use it too.
 
 pub mod error;
 pub mod gpu;

@@ -147,8 +147,27 @@ fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
-fn write_heat_map(path: &Path, map: HeatMap) -> Result<()> {
-    map.write_png(path)?;
+/// An axis of an error map: its label and range.
+type Axis = (&'static str, (f64, f64));
+
+/// Writes `panels` of absolute errors over (x, y) as a PNG heat map.
+fn write_error_map(
+    path: &Path,
+    title: String,
+    (x_label, x_range): Axis,
+    (y_label, y_range): Axis,
+    panels: Vec<(String, Vec<Vec<f64>>)>,
+) -> Result<()> {
+    HeatMap {
+        title,
+        x_label: x_label.into(),
+        y_label: y_label.into(),
+        x_range,
+        y_range,
+        panels,
+        value_label: "absolute error".into(),
+    }
+    .write_png(path)?;
     println!("wrote {}", path.display());
     Ok(())
 }
@@ -202,16 +221,13 @@ fn tir(gpu: &Gpu, args: &TablesArgs) -> Result<()> {
         write_file(path, &tir::reference_file_bytes(&table))?;
     }
     if let Some(path) = &args.error_map {
-        let map = HeatMap {
-            title: "TIR: |analytic estimator − table|".into(),
-            x_label: "μ (cos θ)".into(),
-            y_label: "α".into(),
-            x_range: (0.0, 1.0),
-            y_range: (0.0, 1.0),
-            panels: tir_study::analytic_error_panels(&table),
-            value_label: "absolute error".into(),
-        };
-        write_heat_map(path, map)?;
+        write_error_map(
+            path,
+            "TIR: |analytic estimator − table|".into(),
+            ("μ (cos θ)", (0.0, 1.0)),
+            ("α", (0.0, 1.0)),
+            tir_study::analytic_error_panels(&table),
+        )?;
     }
     Ok(())
 }
@@ -345,16 +361,13 @@ fn resampled(gpu: &Gpu, args: &TablesArgs) -> Result<()> {
          boundaries and filtering precision). The talk: up to 46 %, box filter best."
     );
     if let Some(path) = &args.error_map {
-        let map = HeatMap {
-            title: "fgd-resampled: max over (μ, α) of |resampled − 4-D|".into(),
-            x_label: "η".into(),
-            y_label: "κ".into(),
-            x_range: (0.0, fgd::ETA_MAX),
-            y_range: (0.0, fgd::KAPPA_MAX),
+        write_error_map(
+            path,
+            "fgd-resampled: max over (μ, α) of |resampled − 4-D|".into(),
+            ("η", (0.0, fgd::ETA_MAX)),
+            ("κ", (0.0, fgd::KAPPA_MAX)),
             panels,
-            value_label: "absolute error".into(),
-        };
-        write_heat_map(path, map)?;
+        )?;
     }
     Ok(())
 }
@@ -400,6 +413,30 @@ fn belcour(gpu: &Gpu, args: &TablesArgs) -> Result<()> {
 
     let split = fgd_study::probe_split_table(gpu)?;
     let accuracy = fgd_study::belcour_accuracy(gpu, &table, &split)?;
+    print_accuracy(&accuracy);
+    if let Some(path) = &args.error_map {
+        let bar = progress_bar("belcour error map (cells)");
+        let panels = fgd_study::belcour_error_panels(gpu, &table, &split, |done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        })?;
+        bar.finish_and_clear();
+        write_error_map(
+            path,
+            format!(
+                "fgd-belcour: |FGD − exact|, dielectrics, α = {}",
+                fgd_study::MAP_ALPHA
+            ),
+            ("μ (cos θ)", (0.0, 1.0)),
+            ("η", fgd_study::MAP_ETA),
+            panels,
+        )?;
+    }
+    Ok(())
+}
+
+/// The accuracy study's table: one row per class of interfaces, one column per `fgd` value.
+fn print_accuracy(accuracy: &fgd_study::Accuracy) {
     println!(
         "\nmax |FGD − exact| (mean) over μ ∈ {:?} × α ∈ {:?}, exact = f64 quadrature ({EXACT_RESOLUTION}²):",
         fgd_study::MU,
@@ -424,26 +461,4 @@ fn belcour(gpu: &Gpu, args: &TablesArgs) -> Result<()> {
         "fgd=belcour reads a 64³ dielectric table for η < 1 (the basis has no total internal \
          reflection); the 4-D tables clamp κ to [0, 4]."
     );
-    if let Some(path) = &args.error_map {
-        let bar = progress_bar("belcour error map (cells)");
-        let panels = fgd_study::belcour_error_panels(gpu, &table, &split, |done, total| {
-            bar.set_length(total as u64);
-            bar.set_position(done as u64);
-        })?;
-        bar.finish_and_clear();
-        let map = HeatMap {
-            title: format!(
-                "fgd-belcour: |FGD − exact|, dielectrics, α = {}",
-                fgd_study::MAP_ALPHA
-            ),
-            x_label: "μ (cos θ)".into(),
-            y_label: "η".into(),
-            x_range: (0.0, 1.0),
-            y_range: fgd_study::MAP_ETA,
-            panels,
-            value_label: "absolute error".into(),
-        };
-        write_heat_map(path, map)?;
-    }
-    Ok(())
 }

@@ -2,6 +2,9 @@
 //! split-sum (Karis) table, the other FGD tables and the TIR table. Each is generated on the GPU
 //! by a compute pass, has a CPU f64 reference for spot checks, and a CPU twin that looks it up
 //! as the shader's sampler does ([`filter_axis`]).
+//!
+//! What `lamina tables` prints is computed here too: [`spot`] (every table's spot check),
+//! [`tir_study`] and [`fgd_study`] (the error studies of profiling/TABLES.md).
 
 pub mod belcour;
 pub mod cache;
