@@ -119,6 +119,19 @@ fn check(args: &TablesArgs) -> Result<()> {
     }
 }
 
+/// Runs `load` (a table's cache-or-build) behind a progress bar labelled `what`; returns the
+/// table, whether it came from the cache, and the seconds it took.
+fn load_table<T>(
+    what: &str,
+    load: impl FnOnce(&mut dyn FnMut(u32, u32)) -> lamina::Result<(T, bool)>,
+) -> Result<(T, bool, f64)> {
+    let bar = progress_bar(what);
+    let started = Instant::now();
+    let (table, cached) = load(&mut follow(&bar))?;
+    bar.finish_and_clear();
+    Ok((table, cached, started.elapsed().as_secs_f64()))
+}
+
 /// How a table came to be, for the first line.
 fn provenance(cached: bool) -> &'static str {
     if cached {
@@ -175,22 +188,21 @@ fn write_error_map(
 fn tir(gpu: &Gpu, args: &TablesArgs) -> Result<()> {
     let samples = args.samples.unwrap_or(tir::DEFAULT_SAMPLES);
     let dir = cache::dir();
-    let bar = progress_bar("tir table (η slices)");
-    let started = Instant::now();
-    let (table, cached) = tir_study::load(
-        gpu,
-        args.size,
-        samples,
-        dir.as_deref(),
-        args.rebuild,
-        follow(&bar),
-    )?;
-    bar.finish_and_clear();
+    let (table, cached, seconds) = load_table("tir table (η slices)", |progress| {
+        tir_study::load(
+            gpu,
+            args.size,
+            samples,
+            dir.as_deref(),
+            args.rebuild,
+            progress,
+        )
+    })?;
     println!(
         "tir: {0}x{0}x{0} (μ, α, η), {samples} samples per texel, {1} ({2:.2} s) on {3}; cache: {4}",
         args.size,
         provenance(cached),
-        started.elapsed().as_secs_f64(),
+        seconds,
         gpu.device.report.name,
         cache_text(dir.as_deref(), &tir::cache_key(args.size, samples))
     );
@@ -253,21 +265,21 @@ fn karis(gpu: &Gpu, args: &TablesArgs) -> Result<()> {
 fn load_grid(gpu: &Gpu, kind: GridKind, args: &TablesArgs) -> Result<Grid> {
     let samples = args.samples.unwrap_or(fgd::GRID_SAMPLES);
     let dir = cache::dir();
-    let bar = progress_bar(match kind {
+    let what = match kind {
         GridKind::Full4d => "fgd 4-D table (κ slices)",
         GridKind::DielectricBelow1 => "fgd η<1 table",
-    });
-    let started = Instant::now();
-    let (grid, cached) = fgd_study::load_grid(
-        gpu,
-        kind,
-        args.size,
-        samples,
-        dir.as_deref(),
-        args.rebuild,
-        follow(&bar),
-    )?;
-    bar.finish_and_clear();
+    };
+    let (grid, cached, seconds) = load_table(what, |progress| {
+        fgd_study::load_grid(
+            gpu,
+            kind,
+            args.size,
+            samples,
+            dir.as_deref(),
+            args.rebuild,
+            progress,
+        )
+    })?;
     let [a, b, c, d] = grid.dims;
     println!(
         "{}: {a}x{b}x{c}x{d} (μ, α, η ∈ [{}, {}], κ ∈ [{}, {}]), {samples} samples per texel, \
@@ -278,7 +290,7 @@ fn load_grid(gpu: &Gpu, kind: GridKind, args: &TablesArgs) -> Result<Grid> {
         grid.kappa.0,
         grid.kappa.1,
         provenance(cached),
-        started.elapsed().as_secs_f64(),
+        seconds,
         gpu.device.report.name,
         cache_text(
             dir.as_deref(),
