@@ -7,7 +7,7 @@
 //!   references, their spot checks and error studies;
 //! - [`render`] — passes (sky, shaded sphere), the scene and readback;
 //! - [`model`] — the CPU reference in f64;
-//! - [`oracle`] — the CPU reference for a variant (`eval --backend cpu`, the furnace);
+//! - [`oracle`] — the CPU reference for a variant (`eval --backend cpu` and `exact`, the furnace);
 //! - [`material`] — layer stacks, and the variant a stack is shaded with;
 //! - [`imageio`] — EXR/PNG input and atomic output;
 //! - [`size`] — `WxH` image sizes, one limit for the command line and the sweep files;

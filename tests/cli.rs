@@ -166,7 +166,7 @@ fn bad_material_file_is_named() {
 #[test]
 fn eval_prints_the_documented_json_on_both_backends() {
     let dir = common::scratch_dir("cli-eval");
-    for backend in ["gpu", "cpu"] {
+    for backend in ["gpu", "cpu", "exact"] {
         let out = lamina(
             &[
                 "--validation",
@@ -183,6 +183,161 @@ fn eval_prints_the_documented_json_on_both_backends() {
         );
         assert!(out.status.success(), "{}", stderr(&out));
         check_eval_json(&out.stdout, backend);
+    }
+}
+
+/// A stack of issue 14 §1, kept in tests/materials/.
+fn issue_material(name: &str) -> String {
+    format!("{}/tests/materials/{name}.toml", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Every number `eval --json` printed: R, T and each lobe's weight and roughness, per cosine.
+fn eval_numbers(material: &str, variant: &str, backend: &str, cosines: &str) -> Vec<Vec<f64>> {
+    let dir = common::scratch_dir("cli-eval-numbers");
+    let out = lamina(
+        &[
+            "--validation",
+            "eval",
+            "--material",
+            material,
+            "--variant",
+            variant,
+            "--cos",
+            cosines,
+            "--backend",
+            backend,
+            "--json",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{backend} {variant}: {}",
+        stderr(&out)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let floats = |v: &serde_json::Value| -> Vec<f64> {
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap_or(f64::NAN))
+            .collect()
+    };
+    json["samples"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| {
+            let mut all = floats(&s["reflectance"]);
+            all.extend(floats(&s["transmittance"]));
+            for lobe in s["lobes"].as_array().unwrap() {
+                all.extend(floats(&lobe["weight"]));
+                all.push(lobe["roughness"].as_f64().unwrap_or(f64::NAN));
+            }
+            all
+        })
+        .collect()
+}
+
+/// Largest difference of R and T (the first six numbers of each sample).
+fn energy_gap(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
+    a.iter()
+        .zip(b)
+        .flat_map(|(x, y)| x[..6].iter().zip(&y[..6]).map(|(p, q)| (p - q).abs()))
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn eval_cpu_backend_honours_the_tir_and_fgd_axes() {
+    let cosines = "0.0001,0.3,1";
+    let material = issue_material("tir-trap");
+    for variant in ["tir=lut32", "tir=analytic", "tir=constant,fgd=belcour"] {
+        let gpu = eval_numbers(&material, variant, "gpu", cosines);
+        let cpu = eval_numbers(&material, variant, "cpu", cosines);
+        let exact = eval_numbers(&material, variant, "exact", cosines);
+        for sample in gpu.iter().chain(&cpu).chain(&exact) {
+            assert!(
+                sample.iter().all(|x| x.is_finite()),
+                "{variant}: {sample:?}"
+            );
+        }
+        // The GPU and the CPU twins of its tables: the 2-flux tolerance (render::eval).
+        let agree = energy_gap(&gpu, &cpu);
+        assert!(agree < 1e-3, "{variant}: gpu vs cpu differ by {agree}");
+        // Ignoring the axes (exact FGD, no TIR) lands visibly elsewhere.
+        let ignored = energy_gap(&cpu, &exact);
+        assert!(
+            ignored > 1e-2,
+            "{variant}: cpu is {ignored} from exact; are the axes honoured?"
+        );
+        println!("{variant}: gpu-cpu {agree:.2e}, cpu-exact {ignored:.2e}");
+    }
+}
+
+#[test]
+fn eval_cpu_backend_refuses_what_f64_cannot_reproduce() {
+    let dir = common::scratch_dir("cli-eval-refuse");
+    for (variant, named) in [("fp16=on", "fp16=on"), ("model=ggx", "model=ggx")] {
+        let out = lamina(
+            &[
+                "eval",
+                "--material",
+                "varnished-gold",
+                "--cos",
+                "0.5",
+                "--backend",
+                "cpu",
+                "--variant",
+                variant,
+            ],
+            &dir,
+        );
+        assert!(!out.status.success(), "{variant} was accepted");
+        assert!(stderr(&out).contains(named), "{variant}: {}", stderr(&out));
+    }
+}
+
+#[test]
+fn the_stacks_that_gave_nan_evaluate_and_render_finite() {
+    let thick = issue_material("thick-media");
+    for variant in ["tir=none", "tir=lut32", "tir=analytic,fgd=belcour"] {
+        for backend in ["gpu", "cpu"] {
+            for sample in eval_numbers(&thick, variant, backend, "0.0001,0.5,1") {
+                assert!(
+                    sample.iter().all(|x| x.is_finite()),
+                    "thick media, {variant} on {backend}: {sample:?}"
+                );
+            }
+        }
+    }
+    // render refuses to write an image with a non-finite pixel, so success means every pixel
+    // is finite.
+    let dir = common::scratch_dir("cli-render-nan-stacks");
+    for (material, variant) in [
+        (issue_material("tir-trap"), "tir=lut32"),
+        (issue_material("tir-trap"), "tir=analytic"),
+        (thick, "tir=lut32"),
+    ] {
+        let out = lamina(
+            &[
+                "--validation",
+                "render",
+                "--size",
+                "96x64",
+                "--material",
+                &material,
+                "--variant",
+                variant,
+                "--out",
+                "r.exr",
+            ],
+            &dir,
+        );
+        assert!(
+            out.status.success(),
+            "{material} {variant}: {}",
+            stderr(&out)
+        );
     }
 }
 

@@ -9,10 +9,17 @@ use lamina::render::eval::GpuEvaluator;
 
 use super::{check_validation, GlobalArgs};
 
+/// Where the model is evaluated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 enum Backend {
+    /// The f64 model with every axis of the variant it can honour: the FGD source and the TIR
+    /// correction through the CPU twins of the tables the GPU samples (refuses fp16=on).
     Cpu,
+    /// The shader library on the device (tm_eval.comp).
     Gpu,
+    /// The f64 model itself: FGD integrated exactly, no TIR correction (the reference the
+    /// tables approximate; the white furnace's oracle).
+    Exact,
 }
 
 #[derive(clap::Args)]
@@ -49,8 +56,16 @@ pub fn run(global: &GlobalArgs, args: &EvalArgs) -> Result<()> {
     }
     let layers = stack.params();
     let (backend, results) = match args.backend {
-        Backend::Cpu => (
-            "cpu",
+        Backend::Cpu => {
+            oracle::check_cpu_variant(variant)?;
+            let gpu = global.open_gpu()?;
+            let results =
+                oracle::VariantOracle::new(&gpu, variant)?.evaluate(&layers, &args.cosines)?;
+            check_validation(&gpu)?;
+            ("cpu", results)
+        }
+        Backend::Exact => (
+            "exact",
             args.cosines
                 .iter()
                 .map(|&c| oracle::evaluate(variant, &layers, c))

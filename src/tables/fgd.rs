@@ -254,7 +254,7 @@ pub fn build_grid(
 /// How `fgd=resampled4d` brings the κ axis from n to n/2 slices. Slice m stands for the
 /// original κ index 2m + ½ (so the shader's index arithmetic is the same for every filter);
 /// the filters weigh the original slices 2m − 1, 2m, 2m + 1, 2m + 2 (clamped at the edges).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Filter {
     /// ½, ½: the mean of the two slices (the talk's best).
     Box,
