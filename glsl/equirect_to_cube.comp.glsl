@@ -1,10 +1,9 @@
 #version 460
 // Resamples an equirectangular environment into mip 0 of a cube map (one invocation per
 // destination texel, z = face), bilinearly.
+#include "shared/kernel.glsl"
 #include "lib/cubemap.glsl"
 #include "lib/equirect.glsl"
-
-layout(local_size_x = LAMINA_LOCAL_SIZE_2D, local_size_y = LAMINA_LOCAL_SIZE_2D) in;
 
 layout(set = 0, binding = 0) uniform sampler2D equirect;
 layout(set = 0, binding = 1, rgba16f) uniform writeonly image2DArray cube;

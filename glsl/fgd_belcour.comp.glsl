@@ -6,11 +6,9 @@
 // μ = (i + ½)/n and r = √α = (j + ½)/n, like the split-sum table. Visible-normal sampling,
 // weight G2/G1 (the G2 form of the G2_MODE constant). The host folds the projection into the
 // channels before upload.
-#include "shared/variant.glsl"
+#include "shared/kernel.glsl"
 #include "lib/sampling.glsl"
 #include "lib/microfacet.glsl"
-
-layout(local_size_x = LAMINA_LOCAL_SIZE_2D, local_size_y = LAMINA_LOCAL_SIZE_2D) in;
 
 layout(set = 0, binding = 0, std430) writeonly buffer Table {
     vec4 texels[];

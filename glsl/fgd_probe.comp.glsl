@@ -4,7 +4,7 @@
 #include "shared/variant.glsl"
 #include "bindings/shading.glsl"
 
-layout(local_size_x = 64) in;
+layout(local_size_x_id = SHADE_LOCAL_SIZE_X_ID) in;
 
 layout(set = 1, binding = 0, std430) readonly buffer Points {
     vec4 points[];   // (μ, α, η, κ)

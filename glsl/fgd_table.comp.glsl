@@ -8,14 +8,12 @@
 // Visible-normal sampling of h with Hammersley points, weight G2/G1 (the G2 form of the
 // G2_MODE constant). The samples depend on (μ, α) only, so a work group (one μ, one α, one κ,
 // every η) draws them once into shared memory and each invocation sums F over them.
-#include "shared/variant.glsl"
+#include "shared/kernel.glsl"
 #include "lib/sampling.glsl"
 #include "lib/microfacet.glsl"
 #include "lib/fresnel.glsl"
 
 #define MAX_SAMPLES 1024u
-
-layout(local_size_x = 64) in;
 
 layout(set = 0, binding = 0, std430) writeonly buffer Table {
     float texels[];

@@ -2,11 +2,10 @@
 // GGX pre-filtered radiance for one mip of the environment cube (Karis 2013, with N = V = R),
 // importance-sampling D and reading a source mip chosen from the sample's pdf (Colbert &
 // Křivánek 2007, "GPU-Based Importance Sampling") so few samples give a smooth result.
+#include "shared/kernel.glsl"
 #include "lib/cubemap.glsl"
 #include "lib/sampling.glsl"
 #include "lib/microfacet.glsl"
-
-layout(local_size_x = LAMINA_LOCAL_SIZE_2D, local_size_y = LAMINA_LOCAL_SIZE_2D) in;
 
 layout(set = 0, binding = 0) uniform samplerCube source;
 layout(set = 0, binding = 1, rgba16f) uniform writeonly image2DArray destination;

@@ -3,7 +3,7 @@
 // has that size on the device: writes its length and the sum 1 + 2 + … + length.
 #include "shared/variant.glsl"
 
-layout(local_size_x = 1) in;
+layout(local_size_x_id = SHADE_LOCAL_SIZE_X_ID) in;
 
 layout(set = 0, binding = 0, std430) writeonly buffer Result {
     uint length_and_sum[2];

@@ -4,11 +4,10 @@
 // so that ∫ f cos = F0·A + B. Texel (i, j) holds μ = (i + ½)/n and r = √α = (j + ½)/n.
 // Estimated with visible-normal sampling: the weight of a sample is G2(v, l)/G1(v)
 // (ALGORITHMS.md §10.3), with the G2 form of the G2_MODE constant.
+#include "shared/kernel.glsl"
 #include "lib/sampling.glsl"
 #include "lib/microfacet.glsl"
 #include "lib/fresnel.glsl"
-
-layout(local_size_x = LAMINA_LOCAL_SIZE_2D, local_size_y = LAMINA_LOCAL_SIZE_2D) in;
 
 layout(set = 0, binding = 0, std430) writeonly buffer Table {
     vec2 texels[];

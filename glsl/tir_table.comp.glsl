@@ -6,9 +6,8 @@
 // Visible-normal sampling of h, ω_o = reflect(ω_i, h), weight G1(ω_o) (the separable G2 over the
 // VNDF pdf). Vertex-centred grid: texel (i, j, k) holds μ = i/(n−1), α = j/(n−1), η = k/(n−1);
 // μ = 0 is evaluated at the smallest cosine the sampler resolves (1e-3).
+#include "shared/kernel.glsl"
 #include "lib/sampling.glsl"
-
-layout(local_size_x = LAMINA_LOCAL_SIZE_2D, local_size_y = LAMINA_LOCAL_SIZE_2D) in;
 
 layout(set = 0, binding = 0, std430) writeonly buffer Table {
     float texels[];

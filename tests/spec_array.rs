@@ -4,10 +4,8 @@
 mod common;
 
 use lamina::gpu::ComputeKernel;
-use lamina::shader::VariantKey;
-use lamina::vk::{
-    submit_and_wait, Access, BindingKind, Buffer, BufferDesc, DescriptorSet, Resource,
-};
+use lamina::shader::{kernel, VariantKey};
+use lamina::vk::{submit_and_wait, Access, Buffer, BufferDesc, DescriptorSet, Resource};
 
 #[test]
 fn spec_constant_sizes_the_local_array() {
@@ -17,21 +15,13 @@ fn spec_constant_sizes_the_local_array() {
             max_layers,
             ..VariantKey::default()
         };
-        let kernel = ComputeKernel::new(
-            &gpu,
-            "spec_array.comp.glsl",
-            &[BindingKind::StorageBuffer],
-            0,
-            &variant.spec(),
-        )
-        .unwrap();
+        let kernel =
+            ComputeKernel::build(&gpu, &kernel::SPEC_ARRAY, &[], &[], variant.spec()).unwrap();
         let result = Buffer::new(&gpu.device, BufferDesc::readback(8), "result").unwrap();
         let mut set = DescriptorSet::new(&gpu.device, &kernel.set_layout, "spec array").unwrap();
         set.write(0, Resource::Buffer(&result));
         submit_and_wait(&gpu.device, "spec array", |rec| {
-            rec.bind_pipeline(&kernel.pipeline);
-            rec.bind_set(&kernel.pipeline, &kernel.layout, 0, &set);
-            rec.dispatch(1, 1, 1);
+            kernel.record_dispatch(rec, &[&set], &(), [1, 1, 1]);
             rec.barrier(Access::ComputeWrite, Access::HostRead);
             Ok(())
         })

@@ -6,6 +6,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::{Evaluation, LayerParams, Lobe};
 use crate::shader::interface::material_buffer;
+use crate::shader::kernel::{KernelInterface, LOCAL_SIZE_1D};
 use crate::shader::{Model, VariantKey};
 use crate::tables::fgd::FgdLookup;
 use crate::vk::{
@@ -14,8 +15,6 @@ use crate::vk::{
 };
 
 use super::inputs::ShadingInputs;
-
-const LOCAL_SIZE: u32 = 64;
 
 /// How far the GPU evaluation may lie from the f64 model run with the same tables (the tables'
 /// CPU twins: `tables::fgd::FgdLookup`, `tables::tir::provider`), as absolute differences of
@@ -69,6 +68,18 @@ struct Push {
     stride: u32,
 }
 
+/// `tm_eval.comp.glsl`: one invocation per view cosine, after the shading set.
+pub const KERNEL: KernelInterface = KernelInterface {
+    entry: "tm_eval.comp.glsl",
+    shades: true,
+    bindings: &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
+    push: crate::push_block!(Push {
+        sample_count,
+        stride
+    }),
+    local_size: [LOCAL_SIZE_1D, 1],
+};
+
 pub struct GpuEvaluator<'g> {
     gpu: &'g Gpu,
     pub variant: VariantKey,
@@ -93,14 +104,12 @@ impl<'g> GpuEvaluator<'g> {
         }
         let mut inputs = ShadingInputs::new(gpu)?;
         inputs.prepare(variant)?;
-        let kernel = ComputeKernel::with_sets(
+        let kernel = ComputeKernel::build(
             gpu,
-            "tm_eval.comp.glsl",
+            &KERNEL,
             &variant.defines(),
             &[&inputs.layout.set_layout],
-            &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
-            std::mem::size_of::<Push>() as u32,
-            &variant.spec(),
+            variant.spec(),
         )?;
         Ok(Self {
             gpu,
@@ -165,14 +174,14 @@ impl<'g> GpuEvaluator<'g> {
             .write(1, Resource::Buffer(&results));
         let count = cosines.len() as u32;
         submit_and_wait(device, "eval", |rec| {
-            self.kernel.record_dispatch_sets(
+            self.kernel.record_dispatch(
                 rec,
                 &[&shading, &set],
                 &Push {
                     sample_count: count,
                     stride: stride as u32,
                 },
-                [count.div_ceil(LOCAL_SIZE), 1, 1],
+                [count, 1, 1],
             );
             rec.barrier(Access::ComputeWrite, Access::HostRead);
             Ok(())

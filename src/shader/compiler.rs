@@ -14,7 +14,6 @@ use std::path::{Component, Path, PathBuf};
 /// Constants shared with GLSL; the shaders read them as macros.
 pub const HOST_DEFINES: &[(&str, u32)] = &[
     ("LAMINA_MAX_LAYERS_LIMIT", super::variant::MAX_LAYERS_LIMIT),
-    ("LAMINA_LOCAL_SIZE_2D", crate::tables::LOCAL_SIZE_2D),
     ("LAMINA_TIR_SIZE", crate::tables::tir::DEFAULT_SIZE),
     ("LAMINA_FGD_SIZE", crate::tables::fgd::SIZE),
 ];

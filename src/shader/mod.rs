@@ -2,6 +2,7 @@
 
 mod compiler;
 pub mod interface;
+pub mod kernel;
 pub mod variant;
 
 pub use compiler::{entry_hash, entry_points, source, ShaderCompiler, ShaderError, HOST_DEFINES};

@@ -178,7 +178,7 @@ impl Default for VariantKey {
 pub const AXES: &[&str] = &["model", "max_layers", "fp16", "tir", "fgd", "g2", "ndf"];
 
 /// The specialization constants of the shading passes, mirrored in
-/// `glsl/include/shared/variant.glsl` (ids 0…5).
+/// `glsl/include/shared/variant.glsl` (ids 0…6).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ShadeSpec {
@@ -188,6 +188,9 @@ pub struct ShadeSpec {
     pub fgd: u32,
     pub g2: u32,
     pub ndf: u32,
+    /// The work-group width of a compute entry point that shades, set from its interface when
+    /// the pipeline is made (`shader::kernel::WorkGroupSpec`); the fragment pass has none.
+    pub local_size_x: u32,
 }
 
 crate::spec_constants!(ShadeSpec {
@@ -197,6 +200,7 @@ crate::spec_constants!(ShadeSpec {
     fgd = 3,
     g2 = 4,
     ndf = 5,
+    local_size_x = 6,
 });
 
 impl VariantKey {
@@ -208,6 +212,7 @@ impl VariantKey {
             fgd: self.fgd.code(),
             g2: self.g2.code(),
             ndf: self.ndf.code(),
+            local_size_x: 1,
         }
     }
 
@@ -404,7 +409,8 @@ mod tests {
                 tir: 4,
                 fgd: 3,
                 g2: 3,
-                ndf: 1
+                ndf: 1,
+                local_size_x: 1,
             }
         );
         assert!(k.defines().is_empty());

@@ -15,6 +15,7 @@ use half::f16;
 use crate::error::{Error, Result};
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::imageio::HdrImage;
+use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_2D};
 use crate::vk::{
     submit_and_wait, upload_image, BindingKind, DescriptorSet, Format, Image, ImageDesc,
     ImageState, ImageUsageFlags, ImageView, Resource, Sampler, SamplerDesc,
@@ -55,6 +56,29 @@ struct PrefilterPush {
     destination_size: u32,
     sample_count: u32,
 }
+
+/// `equirect_to_cube.comp.glsl`: one invocation per texel of a cube face, z the face.
+pub const CONVERT_KERNEL: KernelInterface = KernelInterface {
+    entry: "equirect_to_cube.comp.glsl",
+    shades: false,
+    bindings: &[BindingKind::SampledImage, BindingKind::StorageImage],
+    push: crate::push_block!(ConvertPush { face_size }),
+    local_size: [LOCAL_SIZE_2D, LOCAL_SIZE_2D],
+};
+
+/// `prefilter.comp.glsl`: one invocation per texel of a mip's cube face, z the face.
+pub const PREFILTER_KERNEL: KernelInterface = KernelInterface {
+    entry: "prefilter.comp.glsl",
+    shades: false,
+    bindings: &[BindingKind::SampledImage, BindingKind::StorageImage],
+    push: crate::push_block!(PrefilterPush {
+        alpha,
+        source_size,
+        destination_size,
+        sample_count
+    }),
+    local_size: [LOCAL_SIZE_2D, LOCAL_SIZE_2D],
+};
 
 /// Largest finite half float: brighter texels (a bare sun) are clamped to it on upload.
 const HALF_MAX: f32 = 65504.0;
@@ -125,25 +149,14 @@ impl Environment {
             "environment prefiltered cube",
         )?;
 
-        let convert = ComputeKernel::new(
-            gpu,
-            "equirect_to_cube.comp.glsl",
-            &[BindingKind::SampledImage, BindingKind::StorageImage],
-            std::mem::size_of::<ConvertPush>() as u32,
-            &(),
-        )?;
+        let convert = ComputeKernel::build(gpu, &CONVERT_KERNEL, &[], &[], KernelSpec::default())?;
         let mut convert_set = DescriptorSet::new(device, &convert.set_layout, "equirect to cube")?;
         convert_set
             .write(0, Resource::Sampled(&source_2d_view, &equirect_sampler))
             .write(1, Resource::Storage(&source_mip0));
 
-        let prefilter = ComputeKernel::new(
-            gpu,
-            "prefilter.comp.glsl",
-            &[BindingKind::SampledImage, BindingKind::StorageImage],
-            std::mem::size_of::<PrefilterPush>() as u32,
-            &crate::shader::VariantKey::default().spec(),
-        )?;
+        let prefilter =
+            ComputeKernel::build(gpu, &PREFILTER_KERNEL, &[], &[], KernelSpec::default())?;
         let mut targets = Vec::new();
         for mip in 1..desc.mip_count {
             let view = cube.mip_view(mip, &format!("prefiltered mip {mip}"))?;
@@ -163,9 +176,9 @@ impl Environment {
             );
             convert.record_dispatch(
                 rec,
-                &convert_set,
+                &[&convert_set],
                 &ConvertPush { face_size: size },
-                [super::groups(size), super::groups(size), 6],
+                [size, size, 6],
             );
             rec.transition(
                 &source,
@@ -212,21 +225,20 @@ impl Environment {
                 ImageState::Undefined,
                 ImageState::ComputeWrite,
             );
-            rec.bind_pipeline(&prefilter.pipeline);
             for (mip, _, set) in &targets {
                 let r = *mip as f32 / (desc.mip_count - 1) as f32;
                 let (w, _, _) = cube.desc.mip_extent(*mip);
-                rec.bind_set(&prefilter.pipeline, &prefilter.layout, 0, set);
-                rec.push_constants(
-                    &prefilter.layout,
+                prefilter.record_dispatch(
+                    rec,
+                    &[set],
                     &PrefilterPush {
                         alpha: r * r,
                         source_size: size,
                         destination_size: w,
                         sample_count: desc.samples,
                     },
+                    [w, w, 6],
                 );
-                rec.dispatch(super::groups(w), super::groups(w), 6);
             }
             rec.transition(
                 &cube,

@@ -20,6 +20,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::{fresnel, microfacet};
 use crate::shader::interface::{material_buffer, InputViews, ShadingLayout};
+use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_1D, LOCAL_SIZE_2D};
 use crate::shader::{Fgd, VariantKey, G2};
 use crate::tables::belcour::Basis;
 use crate::tables::cache;
@@ -127,24 +128,22 @@ struct GridPush {
     range: [f32; 4],
     sample_count: u32,
     l0: u32,
-    pad: [u32; 2],
 }
 
-/// A table-building kernel specialised for the G2 form `g2` (its other constants default).
-fn g2_kernel(
-    gpu: &Gpu,
-    entry: &str,
-    bindings: &[BindingKind],
-    push_bytes: u32,
-    g2: G2,
-) -> Result<ComputeKernel> {
-    let spec = VariantKey {
-        g2,
-        ..VariantKey::default()
-    }
-    .spec();
-    ComputeKernel::new(gpu, entry, bindings, push_bytes, &spec)
-}
+/// `fgd_table.comp.glsl`: a work group per (μ, α, κ) draws the samples once; its invocations
+/// cover η.
+pub const GRID_KERNEL: KernelInterface = KernelInterface {
+    entry: "fgd_table.comp.glsl",
+    shades: false,
+    bindings: &[BindingKind::StorageBuffer],
+    push: crate::push_block!(GridPush {
+        dims,
+        range,
+        sample_count,
+        l0
+    }),
+    local_size: [LOCAL_SIZE_1D, 1],
+};
 
 /// The disk-cache key of a grid.
 pub fn grid_cache_key(kind: GridKind, g2: G2, n: u32, samples: u32) -> cache::Key {
@@ -205,13 +204,7 @@ pub fn build_grid(
     }
     let dims = kind.dims(n);
     let (eta, kappa) = kind.ranges();
-    let kernel = g2_kernel(
-        gpu,
-        "fgd_table.comp.glsl",
-        &[BindingKind::StorageBuffer],
-        std::mem::size_of::<GridPush>() as u32,
-        g2,
-    )?;
+    let kernel = ComputeKernel::build(gpu, &GRID_KERNEL, &[], &[], KernelSpec::for_g2(g2))?;
     let device = &gpu.device;
     let count: u64 = dims.iter().map(|&d| u64::from(d)).product();
     let buffer = Buffer::new(device, BufferDesc::readback(count * 4), "fgd grid texels")?;
@@ -225,15 +218,14 @@ pub fn build_grid(
             rec.begin_label("fgd grid");
             kernel.record_dispatch(
                 rec,
-                &set,
+                &[&set],
                 &GridPush {
                     dims,
                     range: [eta.0 as f32, eta.1 as f32, kappa.0 as f32, kappa.1 as f32],
                     sample_count: samples,
                     l0,
-                    pad: [0; 2],
                 },
-                [dims[2].div_ceil(64), dims[0], dims[1] * depth],
+                [dims[2], dims[0], dims[1] * depth],
             );
             rec.barrier(Access::ComputeWrite, Access::HostRead);
             rec.end_label();
@@ -334,6 +326,19 @@ struct BelcourPush {
     basis_points: u32,
 }
 
+/// `fgd_belcour.comp.glsl`: one invocation per (μ, α) texel.
+pub const BELCOUR_KERNEL: KernelInterface = KernelInterface {
+    entry: "fgd_belcour.comp.glsl",
+    shades: false,
+    bindings: &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
+    push: crate::push_block!(BelcourPush {
+        size,
+        sample_count,
+        basis_points
+    }),
+    local_size: [LOCAL_SIZE_2D, LOCAL_SIZE_2D],
+};
+
 impl BelcourTable {
     /// From the disk cache when valid, else built on the GPU and stored.
     pub fn load_or_build(
@@ -380,13 +385,7 @@ impl BelcourTable {
                  texels and at least 1 sample"
             )));
         }
-        let kernel = g2_kernel(
-            gpu,
-            "fgd_belcour.comp.glsl",
-            &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
-            std::mem::size_of::<BelcourPush>() as u32,
-            g2,
-        )?;
+        let kernel = ComputeKernel::build(gpu, &BELCOUR_KERNEL, &[], &[], KernelSpec::for_g2(g2))?;
         let device = &gpu.device;
         let out = Buffer::new(
             device,
@@ -405,13 +404,13 @@ impl BelcourTable {
         submit_and_wait(device, "belcour table", |rec| {
             kernel.record_dispatch(
                 rec,
-                &set,
+                &[&set],
                 &BelcourPush {
                     size,
                     sample_count: samples,
                     basis_points: super::belcour::POINTS as u32,
                 },
-                [super::groups(size), super::groups(size), 1],
+                [size, size, 1],
             );
             rec.barrier(Access::ComputeWrite, Access::HostRead);
             Ok(())
@@ -728,6 +727,15 @@ struct ProbePush {
     count: u32,
 }
 
+/// `fgd_probe.comp.glsl`: one invocation per point, after the shading set.
+pub const PROBE_KERNEL: KernelInterface = KernelInterface {
+    entry: "fgd_probe.comp.glsl",
+    shades: true,
+    bindings: &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
+    push: crate::push_block!(ProbePush { count }),
+    local_size: [LOCAL_SIZE_1D, 1],
+};
+
 /// Samples FGD at given (μ, α, η, κ) points with the shaders' own code (`fgd_probe.comp.glsl`),
 /// through the shading set as every pass that shades binds it (an empty stack, no TIR table).
 pub struct FgdProbe<'g> {
@@ -745,14 +753,12 @@ impl<'g> FgdProbe<'g> {
             ..VariantKey::default()
         };
         let layout = ShadingLayout::new(&gpu.device)?;
-        let kernel = ComputeKernel::with_sets(
+        let kernel = ComputeKernel::build(
             gpu,
-            "fgd_probe.comp.glsl",
+            &PROBE_KERNEL,
             &[],
             &[&layout.set_layout],
-            &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
-            std::mem::size_of::<ProbePush>() as u32,
-            &variant.spec(),
+            variant.spec(),
         )?;
         Ok(Self {
             gpu,
@@ -798,11 +804,11 @@ impl<'g> FgdProbe<'g> {
             .write(1, Resource::Buffer(&output));
         let count = points.len() as u32;
         submit_and_wait(device, "fgd probe", |rec| {
-            self.kernel.record_dispatch_sets(
+            self.kernel.record_dispatch(
                 rec,
                 &[&shading, &set],
                 &ProbePush { count },
-                [count.div_ceil(64), 1, 1],
+                [count, 1, 1],
             );
             rec.barrier(Access::ComputeWrite, Access::HostRead);
             Ok(())

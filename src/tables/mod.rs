@@ -16,14 +16,6 @@ pub mod spot;
 pub mod tir;
 pub mod tir_study;
 
-/// Work-group edge of lamina's 2-D compute passes (reaches GLSL as `LAMINA_LOCAL_SIZE_2D`).
-pub const LOCAL_SIZE_2D: u32 = 8;
-
-/// Work groups needed to cover `n` invocations along one axis.
-pub fn groups(n: u32) -> u32 {
-    n.div_ceil(LOCAL_SIZE_2D)
-}
-
 /// How a table's texels sit on its axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Texels {

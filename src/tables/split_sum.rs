@@ -12,7 +12,8 @@ use super::{filter_axis, Texels};
 use crate::error::Result;
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::microfacet;
-use crate::shader::{ShadeSpec, VariantKey, G2};
+use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_2D};
+use crate::shader::G2;
 use crate::vk::{
     submit_and_wait, upload_image, Access, BindingKind, Buffer, BufferDesc, DescriptorSet, Format,
     Image, ImageDesc, ImageState, ImageView, Resource,
@@ -28,6 +29,15 @@ struct Push {
     size: u32,
     sample_count: u32,
 }
+
+/// `split_sum.comp.glsl`: one invocation per texel.
+pub const KERNEL: KernelInterface = KernelInterface {
+    entry: "split_sum.comp.glsl",
+    shades: false,
+    bindings: &[BindingKind::StorageBuffer],
+    push: crate::push_block!(Push { size, sample_count }),
+    local_size: [LOCAL_SIZE_2D, LOCAL_SIZE_2D],
+};
 
 pub struct SplitSumTable {
     /// R16G16_SFLOAT, in `FragmentRead` state.
@@ -66,17 +76,7 @@ impl SplitSumTable {
     }
 
     pub fn build(gpu: &Gpu, g2: G2, size: u32, samples: u32) -> Result<Self> {
-        let spec = ShadeSpec {
-            g2: crate::shader::variant::Axis::code(g2),
-            ..VariantKey::default().spec()
-        };
-        let kernel = ComputeKernel::new(
-            gpu,
-            "split_sum.comp.glsl",
-            &[BindingKind::StorageBuffer],
-            std::mem::size_of::<Push>() as u32,
-            &spec,
-        )?;
+        let kernel = ComputeKernel::build(gpu, &KERNEL, &[], &[], KernelSpec::for_g2(g2))?;
         let device = &gpu.device;
         let buffer = Buffer::new(
             device,
@@ -89,12 +89,12 @@ impl SplitSumTable {
             rec.begin_label("split-sum table");
             kernel.record_dispatch(
                 rec,
-                &set,
+                &[&set],
                 &Push {
                     size,
                     sample_count: samples,
                 },
-                [super::groups(size), super::groups(size), 1],
+                [size, size, 1],
             );
             rec.barrier(Access::ComputeWrite, Access::HostRead);
             rec.end_label();

@@ -15,7 +15,8 @@ use std::path::Path;
 use crate::error::Result;
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::microfacet;
-use crate::shader::{Tir, VariantKey, G2};
+use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_2D};
+use crate::shader::{Tir, G2};
 use crate::tables::cache;
 use crate::tables::{filter_axis, Texels};
 use crate::vk::{
@@ -44,6 +45,19 @@ struct Push {
     sample_count: u32,
     z0: u32,
 }
+
+/// `tir_table.comp.glsl`: one invocation per texel of `depth` η slices from `z0`.
+pub const KERNEL: KernelInterface = KernelInterface {
+    entry: "tir_table.comp.glsl",
+    shades: false,
+    bindings: &[BindingKind::StorageBuffer],
+    push: crate::push_block!(Push {
+        size,
+        sample_count,
+        z0
+    }),
+    local_size: [LOCAL_SIZE_2D, LOCAL_SIZE_2D],
+};
 
 pub struct TirTable {
     pub size: u32,
@@ -93,13 +107,7 @@ impl TirTable {
                 "TIR table size {size}: at least 2 texels per axis"
             )));
         }
-        let kernel = ComputeKernel::new(
-            gpu,
-            "tir_table.comp.glsl",
-            &[BindingKind::StorageBuffer],
-            std::mem::size_of::<Push>() as u32,
-            &VariantKey::default().spec(),
-        )?;
+        let kernel = ComputeKernel::build(gpu, &KERNEL, &[], &[], KernelSpec::default())?;
         let device = &gpu.device;
         let count = u64::from(size).pow(3);
         let buffer = Buffer::new(device, BufferDesc::readback(count * 4), "tir texels")?;
@@ -112,13 +120,13 @@ impl TirTable {
                 rec.begin_label("tir table");
                 kernel.record_dispatch(
                     rec,
-                    &set,
+                    &[&set],
                     &Push {
                         size,
                         sample_count: samples,
                         z0,
                     },
-                    [super::groups(size), super::groups(size), depth],
+                    [size, size, depth],
                 );
                 rec.barrier(Access::ComputeWrite, Access::HostRead);
                 rec.end_label();

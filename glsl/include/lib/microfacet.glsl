@@ -1,13 +1,16 @@
 // GGX microfacet terms (Walter et al. 2007; Heitz 2014, "Understanding the Masking-Shadowing
 // Function in Microfacet-Based BRDFs"; Karis 2013; Hammon 2017). Written in `real` so the fp16
 // variant narrows them; α below ~1e-2 loses precision in fp16 (α² underflows near 6e-5).
-// The forms are chosen by the NDF_MODE and G2_MODE specialization constants.
+// The forms are chosen by NDF_MODE and G2_MODE, which the including entry point declares:
+// shared/variant.glsl in the shading passes, shared/kernel.glsl in the table kernels.
 #ifndef LAMINA_LIB_MICROFACET
 #define LAMINA_LIB_MICROFACET
 
 #include "math.glsl"
 #include "precision.glsl"
-#include "../shared/variant.glsl"
+#if !defined(LAMINA_SHARED_VARIANT) && !defined(LAMINA_SHARED_KERNEL)
+#error "include shared/variant.glsl or shared/kernel.glsl before lib/microfacet.glsl"
+#endif
 
 // D(h) = α² / (π (cos²θ_h (α² − 1) + 1)²).
 real ggx_d(real cos_h, real alpha) {
