@@ -30,6 +30,7 @@ pub mod render;
 pub mod shader;
 pub mod size;
 pub mod tables;
+pub mod text;
 pub mod viewer;
 pub mod vk;
 

@@ -128,11 +128,14 @@ fn every_preset_renders_in_tm2_and_tm6() {
         })
         .collect();
     assert!(rows.len() >= 8);
-    let variants: Vec<VariantKey> = ["model=tm2,max_layers=5", "model=tm6,max_layers=5"]
+    let columns: Vec<sheet::Column> = ["model=tm2,max_layers=5", "model=tm6,max_layers=5"]
         .iter()
-        .map(|k| k.parse().unwrap())
+        .map(|k| sheet::Column {
+            label: (*k).to_owned(),
+            variant: k.parse::<VariantKey>().unwrap(),
+        })
         .collect();
-    let (w, h, _) = sheet::render(&gpu, &common::studio(), &rows, &variants, 256, 0.0).unwrap();
+    let (w, h, _) = sheet::render(&gpu, &common::studio(), &rows, &columns, 256, 0.0).unwrap();
     assert!(w > 512 && h > 256 * rows.len());
     common::assert_validation_clean(&gpu);
 }

@@ -42,9 +42,9 @@ pub fn run(global: &GlobalArgs, args: &SheetArgs) -> Result<()> {
         args.variants.iter().map(String::as_str).collect()
     };
     let rows = sheet::preset_rows()?;
-    let variants = sheet::columns(&rows, &keys)?;
+    let columns = sheet::columns(&rows, &keys)?;
     let gpu = global.open_gpu()?;
-    let (w, h, rgba) = sheet::render(&gpu, &equirect, &rows, &variants, args.tile, args.exposure)?;
+    let (w, h, rgba) = sheet::render(&gpu, &equirect, &rows, &columns, args.tile, args.exposure)?;
     check_validation(&gpu)?;
     imageio::write_png(&args.out, w, h, &rgba)?;
     println!(
@@ -56,9 +56,9 @@ pub fn run(global: &GlobalArgs, args: &SheetArgs) -> Result<()> {
     );
     println!(
         "columns: {}",
-        variants
+        columns
             .iter()
-            .map(|v| v.to_string())
+            .map(|c| c.variant.to_string())
             .collect::<Vec<_>>()
             .join(" | ")
     );

@@ -1,11 +1,10 @@
 //! Sweep charts, drawn with `plotters` twice: once into SVG (text stays text) and once into an
 //! RGB canvas written as PNG. The canvas is lamina's own small plotters backend: plotters 0.3.7
 //! can only rasterise text through `font-kit` (system fontconfig and freetype), so the canvas
-//! draws text with `ab_glyph` and the bundled DejaVu Sans (assets/fonts/).
+//! draws text with the bundled DejaVu Sans ([`crate::text`]).
 
 use std::path::Path;
 
-use ab_glyph::{Font, FontRef, PxScale, ScaleFont};
 use plotters::coord::ranged1d::{SegmentValue, SegmentedCoord, ValueFormatter};
 use plotters::coord::types::RangedCoordi32;
 use plotters::prelude::*;
@@ -13,8 +12,7 @@ use plotters_backend::text_anchor::{HPos, VPos};
 use plotters_backend::{BackendColor, BackendCoord, BackendTextStyle, DrawingErrorKind};
 
 use crate::error::{Error, Result};
-
-static FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+use crate::text::TextFont;
 
 /// One line of a chart: `(category index, value, low, high)` per point.
 pub struct Series {
@@ -215,7 +213,7 @@ pub struct Canvas {
     width: u32,
     height: u32,
     pub rgb: Vec<u8>,
-    font: FontRef<'static>,
+    font: TextFont,
 }
 
 #[derive(Debug)]
@@ -235,7 +233,7 @@ impl Canvas {
             width,
             height,
             rgb: vec![255; (width * height * 3) as usize],
-            font: FontRef::try_from_slice(FONT_BYTES).expect("the bundled font parses"),
+            font: TextFont::bundled(),
         }
     }
 
@@ -249,27 +247,6 @@ impl Canvas {
             let dst = f64::from(self.rgb[i + c]);
             self.rgb[i + c] = (dst + (f64::from(src) - dst) * a).round() as u8;
         }
-    }
-
-    /// Pixel-space layout of `text` at `size` px: the glyphs' pen positions and the box
-    /// (width, ascent + descent).
-    fn layout(&self, text: &str, size: f64) -> (Vec<ab_glyph::Glyph>, (i32, i32)) {
-        let scale = PxScale::from(size as f32);
-        let scaled = self.font.as_scaled(scale);
-        let mut pen = 0.0f32;
-        let mut previous = None;
-        let mut glyphs = Vec::new();
-        for ch in text.chars() {
-            let id = scaled.glyph_id(ch);
-            if let Some(p) = previous {
-                pen += scaled.kern(p, id);
-            }
-            glyphs.push(id.with_scale_and_position(scale, ab_glyph::point(pen, scaled.ascent())));
-            pen += scaled.h_advance(id);
-            previous = Some(id);
-        }
-        let height = (scaled.ascent() - scaled.descent()).ceil() as i32;
-        (glyphs, (pen.ceil() as i32, height))
     }
 }
 
@@ -304,7 +281,7 @@ impl DrawingBackend for &mut Canvas {
         pos: BackendCoord,
     ) -> std::result::Result<(), DrawingErrorKind<CanvasError>> {
         let color = style.color();
-        let (glyphs, (width, height)) = self.layout(text, style.size());
+        let (_, (width, height)) = self.font.layout(text, style.size());
         let dx = match style.anchor().h_pos {
             HPos::Left => 0,
             HPos::Right => -width,
@@ -317,16 +294,9 @@ impl DrawingBackend for &mut Canvas {
         };
         let transform = style.transform();
         let mut covered = Vec::new();
-        for glyph in glyphs {
-            if let Some(outline) = self.font.outline_glyph(glyph) {
-                let bounds = outline.px_bounds();
-                outline.draw(|x, y, coverage| {
-                    let gx = bounds.min.x as i32 + x as i32 + dx;
-                    let gy = bounds.min.y as i32 + y as i32 + dy;
-                    covered.push((transform.transform(gx, gy), coverage));
-                });
-            }
-        }
+        self.font.rasterize(text, style.size(), |x, y, coverage| {
+            covered.push((transform.transform(x + dx, y + dy), coverage));
+        });
         for ((x, y), coverage) in covered {
             self.blend(
                 (pos.0 + x, pos.1 + y),
@@ -342,7 +312,7 @@ impl DrawingBackend for &mut Canvas {
         text: &str,
         style: &S,
     ) -> std::result::Result<(u32, u32), DrawingErrorKind<CanvasError>> {
-        let (_, (w, h)) = self.layout(text, style.size());
+        let (_, (w, h)) = self.font.layout(text, style.size());
         Ok((w.max(0) as u32, h.max(0) as u32))
     }
 }
