@@ -2,6 +2,8 @@
 
 use std::path::PathBuf;
 
+use crate::imageio::ImageIoError;
+use crate::material::MaterialError;
 use crate::shader::{ShaderError, VariantError};
 use crate::vk::VkError;
 
@@ -14,7 +16,9 @@ pub enum Error {
     #[error(transparent)]
     Variant(#[from] VariantError),
     #[error(transparent)]
-    Material(#[from] crate::material::MaterialError),
+    Material(#[from] MaterialError),
+    #[error(transparent)]
+    ImageIo(#[from] ImageIoError),
     #[error("{path}: {message}")]
     Input { path: PathBuf, message: String },
     #[error("writing {path}: {message}")]

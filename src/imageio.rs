@@ -2,13 +2,45 @@
 //!
 //! Every output is written to a temporary file beside the target and renamed into place, so a
 //! failed or interrupted run never leaves a partial file under the requested name.
+//!
+//! Errors are [`ImageIoError`]s, each naming the file (or the exposure and its allowed range).
 
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
 
 use half::f16;
 
-use crate::error::{Error, Result};
+/// An image that cannot be read or written, or an exposure the tone mapper refuses.
+#[derive(Debug, thiserror::Error)]
+pub enum ImageIoError {
+    /// The input file does not exist.
+    #[error("{path}: no such file")]
+    NotFound { path: PathBuf },
+    /// The `exr` crate cannot read the file as an RGBA OpenEXR image.
+    #[error("{path}: not a readable OpenEXR image ({reason})")]
+    NotExr { path: PathBuf, reason: String },
+    /// The image is 0 pixels wide or high.
+    #[error("{path}: image has no pixels")]
+    Empty { path: PathBuf },
+    /// The first pixel (column, row) whose radiance is NaN or infinite.
+    #[error("{path}: pixel ({x}, {y}) has radiance {radiance:?}; expected finite values")]
+    NonFinite {
+        path: PathBuf,
+        x: usize,
+        y: usize,
+        radiance: [f32; 3],
+    },
+    /// An output that could not be written; nothing is left under its name.
+    #[error("writing {path}: {message}")]
+    Write { path: PathBuf, message: String },
+    /// An exposure outside [`EXPOSURE_RANGE_EV`].
+    #[error(
+        "exposure {exposure_ev}: allowed: a number of stops in {}..={}",
+        EXPOSURE_RANGE_EV.start(),
+        EXPOSURE_RANGE_EV.end()
+    )]
+    Exposure { exposure_ev: f32 },
+}
 
 /// A linear RGBA image in f32, rows top to bottom.
 #[derive(Clone, Debug, PartialEq)]
@@ -24,20 +56,15 @@ impl HdrImage {
     }
 }
 
-fn input_error(path: &Path, message: impl Into<String>) -> Error {
-    Error::Input {
-        path: path.to_owned(),
-        message: message.into(),
-    }
-}
-
 /// Reads the first RGBA layer of an OpenEXR file (any compression the `exr` crate reads, DWAB
 /// included). Missing alpha reads as 1. Rejects non-finite radiance, which would otherwise turn
 /// into NaN pixels downstream; slightly negative values, which lossy EXR compression (DWAB)
 /// leaves around dark texels, are clamped to 0.
-pub fn read_exr(path: &Path) -> Result<HdrImage> {
+pub fn read_exr(path: &Path) -> Result<HdrImage, ImageIoError> {
     if !path.is_file() {
-        return Err(input_error(path, "no such file"));
+        return Err(ImageIoError::NotFound {
+            path: path.to_owned(),
+        });
     }
     let image = exr::prelude::read_first_rgba_layer_from_file(
         path,
@@ -51,25 +78,28 @@ pub fn read_exr(path: &Path) -> Result<HdrImage> {
             image.pixels[index] = [r, g, b, a];
         },
     )
-    .map_err(|e| input_error(path, format!("not a readable OpenEXR image ({e})")))?;
+    .map_err(|e| ImageIoError::NotExr {
+        path: path.to_owned(),
+        reason: e.to_string(),
+    })?;
     let mut image = image.layer_data.channel_data.pixels;
     if image.width == 0 || image.height == 0 {
-        return Err(input_error(path, "image has no pixels"));
+        return Err(ImageIoError::Empty {
+            path: path.to_owned(),
+        });
     }
     if let Some(i) = image
         .pixels
         .iter()
         .position(|p| p[..3].iter().any(|c| !c.is_finite()))
     {
-        return Err(input_error(
-            path,
-            format!(
-                "pixel ({}, {}) has radiance {:?}; expected finite values",
-                i % image.width,
-                i / image.width,
-                &image.pixels[i][..3]
-            ),
-        ));
+        let [r, g, b, _] = image.pixels[i];
+        return Err(ImageIoError::NonFinite {
+            path: path.to_owned(),
+            x: i % image.width,
+            y: i / image.width,
+            radiance: [r, g, b],
+        });
     }
     for p in &mut image.pixels {
         for c in &mut p[..3] {
@@ -82,9 +112,9 @@ pub fn read_exr(path: &Path) -> Result<HdrImage> {
 /// Writes through a temporary file in the same directory, then renames it over `path`.
 pub fn write_atomically(
     path: &Path,
-    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
-) -> Result<()> {
-    let output_error = |message: String| Error::Output {
+    write: impl FnOnce(&Path) -> Result<(), String>,
+) -> Result<(), ImageIoError> {
+    let output_error = |message: String| ImageIoError::Write {
         path: path.to_owned(),
         message,
     };
@@ -108,7 +138,7 @@ pub fn write_atomically(
 }
 
 /// Writes `contents` (text or bytes) to `path` through [`write_atomically`].
-pub fn write_file_atomically(path: &Path, contents: impl AsRef<[u8]>) -> Result<()> {
+pub fn write_file_atomically(path: &Path, contents: impl AsRef<[u8]>) -> Result<(), ImageIoError> {
     write_atomically(path, |temp| {
         std::fs::write(temp, contents.as_ref()).map_err(|e| e.to_string())
     })
@@ -120,7 +150,7 @@ pub fn write_exr_rgba16f(
     width: usize,
     height: usize,
     pixels: &[[f16; 4]],
-) -> Result<()> {
+) -> Result<(), ImageIoError> {
     assert_eq!(
         pixels.len(),
         width * height,
@@ -154,15 +184,11 @@ fn srgb_encode(x: f32) -> f32 {
 pub const EXPOSURE_RANGE_EV: RangeInclusive<f32> = -24.0..=24.0;
 
 /// Errs, naming the allowed range, unless `exposure_ev` is in [`EXPOSURE_RANGE_EV`].
-pub fn check_exposure(exposure_ev: f32) -> Result<()> {
+pub fn check_exposure(exposure_ev: f32) -> Result<(), ImageIoError> {
     if EXPOSURE_RANGE_EV.contains(&exposure_ev) {
         return Ok(());
     }
-    Err(Error::Unsupported(format!(
-        "exposure {exposure_ev}: allowed: a number of stops in {}..={}",
-        EXPOSURE_RANGE_EV.start(),
-        EXPOSURE_RANGE_EV.end()
-    )))
+    Err(ImageIoError::Exposure { exposure_ev })
 }
 
 /// Tone-maps linear radiance to 8-bit sRGB: exposure (in stops), ACES fit, sRGB encoding.
@@ -185,14 +211,19 @@ pub fn write_png_tonemapped(
     height: usize,
     pixels: &[[f16; 4]],
     exposure_ev: f32,
-) -> Result<()> {
+) -> Result<(), ImageIoError> {
     check_exposure(exposure_ev)?;
     let rgba = tonemap(pixels, exposure_ev);
     write_png(path, width, height, &rgba)
 }
 
 /// Writes 8-bit RGBA pixels as a PNG.
-pub fn write_png(path: &Path, width: usize, height: usize, rgba: &[u8]) -> Result<()> {
+pub fn write_png(
+    path: &Path,
+    width: usize,
+    height: usize,
+    rgba: &[u8],
+) -> Result<(), ImageIoError> {
     write_atomically(path, |temp| {
         let file = std::fs::File::create(temp).map_err(|e| e.to_string())?;
         let mut encoder =

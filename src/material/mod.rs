@@ -52,8 +52,9 @@ mod write;
 
 use std::path::{Path, PathBuf};
 
+use crate::imageio::{self, ImageIoError};
 use crate::model::LayerParams;
-use crate::shader::Model;
+use crate::shader::{Model, VariantError};
 
 pub use artist::gulbrandsen;
 pub use presets::presets;
@@ -98,6 +99,12 @@ pub enum MaterialError {
         layers: usize,
         max_layers: u32,
     },
+    /// A variant key that does not parse ([`Stack::variant`]).
+    #[error(transparent)]
+    Variant(#[from] VariantError),
+    /// The stack could not be written ([`Stack::save`]); names the file and why.
+    #[error(transparent)]
+    Save(ImageIoError),
 }
 
 impl Stack {
@@ -132,8 +139,8 @@ impl Stack {
     }
 
     /// Writes [`Stack::to_toml`] to `path` atomically (a temporary file, then a rename).
-    pub fn save(&self, path: &Path) -> crate::error::Result<()> {
-        crate::imageio::write_file_atomically(path, self.to_toml())
+    pub fn save(&self, path: &Path) -> Result<(), MaterialError> {
+        imageio::write_file_atomically(path, self.to_toml()).map_err(MaterialError::Save)
     }
 
     /// The layers as the model consumes them.

@@ -6,10 +6,9 @@
 //! (a 6-flux stack is shaded by `tm6`) and `max_layers`, grown from its default to hold the
 //! stack — never shrunk, so the static array size of a shallow stack stays the default's.
 
-use crate::error::Result;
 use crate::shader::{Model, VariantKey};
 
-use super::Stack;
+use super::{MaterialError, Stack};
 
 /// The variant a key's missing axes come from: the defaults with `model`, and `max_layers`
 /// grown to hold `layers` layers.
@@ -24,7 +23,10 @@ pub fn base_variant(model: Model, layers: usize) -> VariantKey {
 
 /// Loads a material (a preset name or a file, [`Stack::resolve`]) and the variant `key` names
 /// for it ([`Stack::variant`]).
-pub fn resolve_with_variant(material: &str, key: Option<&str>) -> Result<(Stack, VariantKey)> {
+pub fn resolve_with_variant(
+    material: &str,
+    key: Option<&str>,
+) -> Result<(Stack, VariantKey), MaterialError> {
     let stack = Stack::resolve(material)?;
     let variant = stack.variant(key)?;
     Ok((stack, variant))
@@ -38,7 +40,7 @@ impl Stack {
 
     /// The variant `key` names over [`Stack::base_variant`] (the base itself for `None`),
     /// checked to hold the stack ([`Stack::check_fits`]: a key may set `max_layers` lower).
-    pub fn variant(&self, key: Option<&str>) -> Result<VariantKey> {
+    pub fn variant(&self, key: Option<&str>) -> Result<VariantKey, MaterialError> {
         let base = self.base_variant();
         let variant = match key {
             Some(k) => VariantKey::parse_over(k, base)?,

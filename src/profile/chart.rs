@@ -57,7 +57,8 @@ impl Chart {
             .chunks(3)
             .flat_map(|p| [p[0], p[1], p[2], 255])
             .collect();
-        crate::imageio::write_png(&png_path, WIDTH as usize, HEIGHT as usize, &rgba)
+        crate::imageio::write_png(&png_path, WIDTH as usize, HEIGHT as usize, &rgba)?;
+        Ok(())
     }
 
     /// Whether the values span enough decades to need a log-scaled y axis.
@@ -361,7 +362,8 @@ impl HeatMap {
             .chunks(3)
             .flat_map(|p| [p[0], p[1], p[2], 255])
             .collect();
-        crate::imageio::write_png(path, width as usize, height as usize, &rgba)
+        crate::imageio::write_png(path, width as usize, height as usize, &rgba)?;
+        Ok(())
     }
 
     fn draw<DB: DrawingBackend>(

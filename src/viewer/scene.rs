@@ -7,7 +7,7 @@ use std::sync::mpsc::{Receiver, Sender};
 
 use half::f16;
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::imageio;
 use crate::model::LayerParams;
@@ -155,8 +155,5 @@ fn step(
 }
 
 fn read_env(path: &Path) -> Result<imageio::HdrImage> {
-    imageio::read_exr(path).map_err(|e| Error::Input {
-        path: path.to_owned(),
-        message: e.to_string(),
-    })
+    Ok(imageio::read_exr(path)?)
 }
