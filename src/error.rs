@@ -4,7 +4,8 @@ use std::path::PathBuf;
 
 use crate::imageio::ImageIoError;
 use crate::material::MaterialError;
-use crate::shader::{ShaderError, VariantError};
+use crate::shader::ShaderError;
+use crate::variant::VariantError;
 use crate::vk::VkError;
 
 #[derive(Debug, thiserror::Error)]

@@ -2,7 +2,8 @@
 //!
 //! Module map (DESIGN.md §3):
 //! - [`vk`] — the only module with raw `ash` — instance, device, memory, pipelines, queries;
-//! - [`shader`] — GLSL → SPIR-V with shaderc, and the typed variant key;
+//! - [`variant`] — the typed variant key: the axes a shader is specialized on;
+//! - [`shader`] — GLSL → SPIR-V with shaderc, the shading and kernel interfaces;
 //! - [`tables`] — GPU-built tables (prefiltered environment, split-sum, FGD, TIR) with CPU
 //!   references, their spot checks and error studies;
 //! - [`render`] — passes (sky, shaded sphere), the scene and readback;
@@ -31,6 +32,7 @@ pub mod shader;
 pub mod size;
 pub mod tables;
 pub mod text;
+pub mod variant;
 pub mod viewer;
 pub mod vk;
 

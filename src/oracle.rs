@@ -15,7 +15,7 @@ use crate::gpu::Gpu;
 use crate::model::fgd::ExactFgd;
 use crate::model::{tm2, tm6, Evaluation, Fgd, LayerParams, NoTir, Tir};
 use crate::render::inputs::ShadingInputs;
-use crate::shader::{Model, VariantKey};
+use crate::variant::{Model, VariantKey};
 
 /// The f64 model with exactly integrated FGD (the variant's G2 form) and no TIR correction.
 pub fn evaluate(variant: VariantKey, layers: &[LayerParams], cos_theta: f64) -> Evaluation {

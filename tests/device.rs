@@ -5,8 +5,9 @@ mod common;
 
 use lamina::render::eval::GpuEvaluator;
 use lamina::render::Renderer;
-use lamina::shader::{entry_points, ShaderCompiler, VariantKey};
+use lamina::shader::{entry_points, ShaderCompiler};
 use lamina::tables::environment::EnvDesc;
+use lamina::variant::VariantKey;
 
 #[test]
 fn device_is_created_and_reports_lamina_features() {

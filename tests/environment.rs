@@ -3,9 +3,9 @@
 mod common;
 
 use glam::DVec3;
-use lamina::shader::G2;
 use lamina::tables::environment::{self, EnvDesc, Environment};
 use lamina::tables::split_sum::{self, SplitSumTable};
+use lamina::variant::G2;
 
 fn luminance(c: [f32; 4]) -> f64 {
     0.2126 * c[0] as f64 + 0.7152 * c[1] as f64 + 0.0722 * c[2] as f64

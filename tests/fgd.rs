@@ -5,10 +5,10 @@ mod common;
 
 use lamina::model::fgd::ExactFgd;
 use lamina::model::{fresnel, Fgd as _};
-use lamina::shader::{Fgd, G2};
 use lamina::tables::belcour::Basis;
 use lamina::tables::fgd::{self, BelcourTable, FgdImages, FgdProbe, Filter, Grid, GridKind};
 use lamina::tables::split_sum::SplitSumTable;
+use lamina::variant::{Fgd, G2};
 
 const G2_FORM: G2 = G2::HeightCorrelated;
 

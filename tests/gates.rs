@@ -10,7 +10,7 @@ use std::path::Path;
 use lamina::material::Stack;
 use lamina::profile::bench::Case;
 use lamina::profile::counter::{count_instructions, CountRequest};
-use lamina::shader::VariantKey;
+use lamina::variant::VariantKey;
 
 #[test]
 fn instruction_counts_order_the_variants() {

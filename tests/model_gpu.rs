@@ -114,7 +114,7 @@ fn furnace_shows_no_energy_gain_for_lossless_stacks() {
 fn every_preset_renders_in_tm2_and_tm6() {
     use lamina::material::{presets, Stack};
     use lamina::render::sheet;
-    use lamina::shader::VariantKey;
+    use lamina::variant::VariantKey;
 
     let gpu = common::gpu();
     let rows: Vec<sheet::SheetRow> = presets()

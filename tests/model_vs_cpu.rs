@@ -9,7 +9,7 @@ use lamina::model::{
     tm2, tm6, Evaluation, LayerParams, NoTir, INDEX_MATCHED, IOR_AIR, REFLECTS_NOTHING,
 };
 use lamina::render::eval::{GpuEvaluator, Tolerance};
-use lamina::shader::{Model, VariantKey};
+use lamina::variant::{Model, VariantKey};
 
 /// Metals of ALGORITHMS.md §12.2 (Au, Ag, Al, Cu, Cr).
 const METALS: [([f64; 3], [f64; 3]); 5] = [

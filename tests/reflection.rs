@@ -23,8 +23,9 @@ use lamina::shader::interface::{
     FrameConstants, LayerGpu, MaterialGpu, SCENE_BINDINGS, SCENE_SET, SHADING_BINDINGS, SHADING_SET,
 };
 use lamina::shader::kernel::{self, KernelInterface, KernelSpec};
-use lamina::shader::{entry_points, ShadeSpec, ShaderCompiler};
+use lamina::shader::{entry_points, ShaderCompiler};
 use lamina::tables::{environment, fgd, split_sum, tir};
+use lamina::variant::ShadeSpec;
 use lamina::vk::{BindingKind, SpecConstants};
 use rspirv_reflect::rspirv::binary::{parse_words, Consumer, ParseAction};
 use rspirv_reflect::rspirv::dr::{Instruction, Loader, ModuleHeader, Operand};

@@ -4,8 +4,8 @@ mod common;
 
 use glam::Vec3;
 use lamina::render::Renderer;
-use lamina::shader::VariantKey;
 use lamina::tables::environment::{self, EnvDesc};
+use lamina::variant::VariantKey;
 
 /// Distance from the origin (the unit sphere's centre) to the ray's line.
 fn miss_distance(eye: Vec3, dir: Vec3) -> f32 {

@@ -4,7 +4,8 @@
 mod common;
 
 use lamina::gpu::ComputeKernel;
-use lamina::shader::{kernel, VariantKey};
+use lamina::shader::kernel;
+use lamina::variant::VariantKey;
 use lamina::vk::{submit_and_wait, Access, Buffer, BufferDesc, DescriptorSet, Resource};
 
 #[test]

@@ -5,10 +5,10 @@ mod common;
 
 use lamina::material::{presets, Stack};
 use lamina::render::Renderer;
-use lamina::shader::VariantKey;
 use lamina::tables::cache;
 use lamina::tables::environment::EnvDesc;
 use lamina::tables::tir::{self, TirTable};
+use lamina::variant::VariantKey;
 use lamina::vk::{read_image_mip, ImageState};
 
 /// A small table keeps the test quick; the GPU code is the same at every size.

@@ -9,7 +9,7 @@ use toml::{Table, Value};
 use super::artist::gulbrandsen;
 use super::MaterialError;
 use crate::model::LayerParams;
-use crate::shader::Model;
+use crate::variant::Model;
 
 const LAYER_KEYS: &[&str] = &[
     "ior",

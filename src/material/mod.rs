@@ -39,7 +39,7 @@
 //! [`Stack::variant`] gives the variant a stack is shaded with for a key that names only some
 //! axes (the model and `max_layers` follow the stack; `variant.rs`).
 //!
-//! [`MAX_LAYERS_LIMIT`]: crate::shader::variant::MAX_LAYERS_LIMIT
+//! [`MAX_LAYERS_LIMIT`]: crate::variant::MAX_LAYERS_LIMIT
 
 mod artist;
 mod layer;
@@ -54,7 +54,7 @@ use std::path::{Path, PathBuf};
 
 use crate::imageio::{self, ImageIoError};
 use crate::model::LayerParams;
-use crate::shader::{Model, VariantError};
+use crate::variant::{Model, VariantError};
 
 pub use artist::gulbrandsen;
 pub use presets::presets;

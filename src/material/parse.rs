@@ -10,8 +10,7 @@ use toml::{Table, Value};
 
 use super::layer::LayerReader;
 use super::{MaterialError, Stack};
-use crate::shader::variant::MAX_LAYERS_LIMIT;
-use crate::shader::Model;
+use crate::variant::{Model, MAX_LAYERS_LIMIT};
 
 const TOP_KEYS: &[&str] = &["name", "model", "layer"];
 

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use super::{presets, Stack};
-use crate::shader::Model;
+use crate::variant::Model;
 
 const FILE: &str = "bad/material.toml";
 

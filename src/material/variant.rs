@@ -6,7 +6,7 @@
 //! (a 6-flux stack is shaded by `tm6`) and `max_layers`, grown from its default to hold the
 //! stack — never shrunk, so the static array size of a shallow stack stays the default's.
 
-use crate::shader::{Model, VariantKey};
+use crate::variant::{Model, VariantKey};
 
 use super::{MaterialError, Stack};
 

@@ -8,7 +8,7 @@ use toml::Value;
 
 use super::Stack;
 use crate::model::LayerParams;
-use crate::shader::{Axis, Model};
+use crate::variant::{Axis, Model};
 
 fn rgb_text(v: [f64; 3]) -> String {
     format!("[{:?}, {:?}, {:?}]", v[0], v[1], v[2])

@@ -4,7 +4,7 @@
 //! exactly what the shader samples.
 
 use super::{fresnel, microfacet, Fgd};
-use crate::shader::G2;
+use crate::variant::G2;
 
 /// FGD(μ, α, η, κ) = ∫ F(ω_i·h; η, κ) D(h) G2(ω_i, ω_o) / (4μ) dω_o by a midpoint rule over
 /// the two uniform variables of visible-normal sampling (Heitz 2018): h ~ D_v(ω_i, h), whose

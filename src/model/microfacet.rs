@@ -3,7 +3,7 @@
 
 use glam::DVec3;
 
-use crate::shader::G2;
+use crate::variant::G2;
 
 /// GGX D(h) = α² / (π (cos²θ_h (α² − 1) + 1)²).
 pub fn ggx_d(cos_h: f64, alpha: f64) -> f64 {

@@ -15,7 +15,7 @@ use super::random::{case_seed, random_stack, Rng};
 use super::tir::{AnalyticTir, ConstantTir, CONSTANT_FRACTION};
 use super::{tm2, tm6, Evaluation, Fgd, NoTir, Tir};
 use crate::material::Stack;
-use crate::shader::{Model, G2};
+use crate::variant::{Model, G2};
 
 /// How many random stacks the test evaluates.
 const CASES: usize = 100_000;

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use super::LayerParams;
 use crate::material::Stack;
-use crate::shader::Model;
+use crate::variant::Model;
 
 /// xorshift64*: a tiny seeded generator, enough for test cases.
 pub struct Rng(pub u64);

@@ -154,7 +154,7 @@ pub(crate) mod tests {
     use crate::model::fgd::ExactFgd;
     use crate::model::random::Rng;
     use crate::model::{fresnel, NoTir};
-    use crate::shader::G2;
+    use crate::variant::G2;
 
     pub fn coat(ior: f64, roughness: f64) -> LayerParams {
         LayerParams {

@@ -240,7 +240,7 @@ mod tests {
     use crate::model::random::Rng;
     use crate::model::tm2::tests::{coat, gold};
     use crate::model::NoTir;
-    use crate::shader::G2;
+    use crate::variant::G2;
 
     fn medium(
         ior: f64,

@@ -14,8 +14,8 @@ use crate::material::Stack;
 use crate::model::LayerParams;
 use crate::render::forward::ForwardPass;
 use crate::render::Renderer;
-use crate::shader::{Model, VariantKey};
 use crate::tables::environment::EnvDesc;
+use crate::variant::{Model, VariantKey};
 
 use super::stats::Summary;
 

@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 use std::path::{Component, Path, PathBuf};
 
 use crate::error::{Error, Result};
-use crate::shader::variant::VariantKey;
+use crate::variant::VariantKey;
 
 use super::bench::{Results, Run};
 use super::stats::MinMeanMax;

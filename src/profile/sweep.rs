@@ -38,9 +38,8 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::imageio::write_file_atomically;
 use crate::material::Stack;
-use crate::shader::variant::AXES;
-use crate::shader::VariantKey;
 use crate::size::Size;
+use crate::variant::{VariantKey, AXES};
 
 use super::bench::Case;
 use super::counter::CounterSetup;

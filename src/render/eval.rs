@@ -7,8 +7,8 @@ use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::{Evaluation, LayerParams, Lobe};
 use crate::shader::interface::material_buffer;
 use crate::shader::kernel::{KernelInterface, LOCAL_SIZE_1D};
-use crate::shader::{Model, VariantKey};
 use crate::tables::fgd::FgdLookup;
+use crate::variant::{Model, VariantKey};
 use crate::vk::{
     submit_and_wait, Access, BindingKind, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
     Resource,

@@ -2,7 +2,7 @@
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
-use crate::shader::VariantKey;
+use crate::variant::VariantKey;
 use crate::vk::{Format, GraphicsDesc, Pipeline, PipelineLayout};
 
 use super::scene::Vertex;

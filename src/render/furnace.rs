@@ -14,8 +14,8 @@ use crate::imageio::HdrImage;
 use crate::model::LayerParams;
 use crate::oracle;
 use crate::profile::stats::MinMeanMax;
-use crate::shader::{Model, VariantKey};
 use crate::tables::environment::EnvDesc;
+use crate::variant::{Model, VariantKey};
 
 use super::renderer::Renderer;
 

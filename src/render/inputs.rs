@@ -13,10 +13,10 @@ use std::collections::HashMap;
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::shader::interface::{InputViews, ShadingLayout};
-use crate::shader::{Fgd, Tir, VariantKey, G2};
 use crate::tables::fgd::{FgdImages, FgdLookup};
 use crate::tables::split_sum::{self, SplitSumTable};
 use crate::tables::tir::{self, TirTable};
+use crate::variant::{Fgd, Tir, VariantKey, G2};
 use crate::vk::{Buffer, DescriptorSet};
 
 /// The shading set's layout and the tables of every variant prepared so far.

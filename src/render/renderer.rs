@@ -13,8 +13,8 @@ use crate::model::LayerParams;
 use crate::shader::interface::{
     material_buffer, FrameConstants, SCENE_BINDINGS, SCENE_SET, SHADING_SET,
 };
-use crate::shader::VariantKey;
 use crate::tables::environment::{EnvDesc, Environment};
+use crate::variant::VariantKey;
 use crate::vk::{
     submit_and_wait, Access, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
     DescriptorSetLayout, Format, GpuProfiler, Image, ImageDesc, ImageState, PipelineLayout,

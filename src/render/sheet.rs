@@ -7,9 +7,9 @@ use crate::gpu::Gpu;
 use crate::imageio::{check_exposure, tonemap, HdrImage};
 use crate::material::{base_variant, presets, Stack};
 use crate::model::LayerParams;
-use crate::shader::VariantKey;
 use crate::tables::environment::EnvDesc;
 use crate::text::TextFont;
+use crate::variant::VariantKey;
 
 use super::renderer::Renderer;
 

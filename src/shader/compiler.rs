@@ -13,7 +13,7 @@ use std::path::{Component, Path, PathBuf};
 
 /// Constants shared with GLSL; the shaders read them as macros.
 pub const HOST_DEFINES: &[(&str, u32)] = &[
-    ("LAMINA_MAX_LAYERS_LIMIT", super::variant::MAX_LAYERS_LIMIT),
+    ("LAMINA_MAX_LAYERS_LIMIT", crate::variant::MAX_LAYERS_LIMIT),
     ("LAMINA_TIR_SIZE", crate::tables::tir::DEFAULT_SIZE),
     ("LAMINA_FGD_SIZE", crate::tables::fgd::SIZE),
 ];
@@ -128,7 +128,7 @@ fn normalise(path: &Path) -> Option<String> {
 const GENERATED_CODES: &str = "include/generated/codes.glsl";
 
 fn codes_glsl() -> String {
-    use super::variant::{Axis, Fgd, Model, Ndf, Tir, G2};
+    use crate::variant::{Axis, Fgd, Model, Ndf, Tir, G2};
     fn axis<A: Axis>(out: &mut String) {
         for &(spelling, value) in A::VALUES {
             let name = format!("{}_{}", A::NAME, spelling)
@@ -138,7 +138,7 @@ fn codes_glsl() -> String {
         }
     }
     let mut out = String::from(
-        "// Written by src/shader/compiler.rs from the Rust value tables (shader::variant) and\n\
+        "// Written by src/shader/compiler.rs from the Rust value tables (src/variant.rs) and\n\
          // the model's constants (model, model::hg, model::tir). Do not copy these by hand.\n\
          #ifndef LAMINA_GENERATED_CODES\n#define LAMINA_GENERATED_CODES\n",
     );

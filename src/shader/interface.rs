@@ -12,7 +12,7 @@ use crate::vk::{
     Resource, Sampler, SamplerDesc, Stages, VkResult,
 };
 
-use super::variant::MAX_LAYERS_LIMIT;
+use crate::variant::MAX_LAYERS_LIMIT;
 
 /// Per-frame constants (`shared/frame.glsl`, std140).
 #[repr(C)]

@@ -10,7 +10,7 @@
 
 use crate::vk::BindingKind;
 
-use super::variant::{Axis, ShadeSpec, G2};
+use crate::variant::{Axis, ShadeSpec, VariantKey, G2};
 
 /// Specialization constants of the table and utility kernels, mirrored in
 /// `glsl/include/shared/kernel.glsl` (ids 0…2).
@@ -44,7 +44,7 @@ impl KernelSpec {
 /// The default G2 form (for kernels whose output does not depend on it).
 impl Default for KernelSpec {
     fn default() -> Self {
-        Self::for_g2(super::VariantKey::default().g2)
+        Self::for_g2(VariantKey::default().g2)
     }
 }
 

@@ -1,9 +1,8 @@
-//! Shader compilation and the variant key.
+//! Shader compilation (GLSL → SPIR-V), the shading pass's interface and the compute kernels'.
+//! The variant key the shaders are specialized with is [`crate::variant`].
 
 mod compiler;
 pub mod interface;
 pub mod kernel;
-pub mod variant;
 
 pub use compiler::{entry_hash, entry_points, source, ShaderCompiler, ShaderError, HOST_DEFINES};
-pub use variant::{Axis, Fgd, Model, Ndf, ShadeSpec, Tir, VariantError, VariantKey, G2};

@@ -21,12 +21,12 @@ use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::{fresnel, microfacet};
 use crate::shader::interface::{material_buffer, InputViews, ShadingLayout};
 use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_1D, LOCAL_SIZE_2D};
-use crate::shader::{Fgd, VariantKey, G2};
 use crate::tables::belcour::Basis;
 use crate::tables::cache;
 use crate::tables::split_sum::SplitSumTable;
 use crate::tables::tir::TirTable;
 use crate::tables::{filter_axis, Texels};
+use crate::variant::{Fgd, VariantKey, G2};
 use crate::vk::{
     submit_and_wait, upload_image, Access, BindingKind, Buffer, BufferDesc, BufferUsageFlags,
     DescriptorSet, Format, Image, ImageDesc, ImageState, ImageView, Resource,
@@ -149,7 +149,7 @@ pub const GRID_KERNEL: KernelInterface = KernelInterface {
 pub fn grid_cache_key(kind: GridKind, g2: G2, n: u32, samples: u32) -> cache::Key {
     cache::Key {
         kind: kind.name(),
-        params: vec![n, samples, crate::shader::variant::Axis::code(g2)],
+        params: vec![n, samples, crate::variant::Axis::code(g2)],
         shader_hash: crate::shader::entry_hash("fgd_table.comp.glsl"),
     }
 }
@@ -350,7 +350,7 @@ impl BelcourTable {
     ) -> Result<(Self, bool)> {
         let key = cache::Key {
             kind: "fgd-belcour",
-            params: vec![size, samples, crate::shader::variant::Axis::code(g2)],
+            params: vec![size, samples, crate::variant::Axis::code(g2)],
             shader_hash: crate::shader::entry_hash("fgd_belcour.comp.glsl"),
         };
         let basis = Basis::fit();
@@ -765,7 +765,7 @@ impl<'g> FgdProbe<'g> {
             layout,
             kernel,
             material: material_buffer(&gpu.device, &[], "fgd probe material")?,
-            tir_unused: TirTable::for_variant(gpu, crate::shader::Tir::None)?,
+            tir_unused: TirTable::for_variant(gpu, crate::variant::Tir::None)?,
         })
     }
 
@@ -794,7 +794,7 @@ impl<'g> FgdProbe<'g> {
         let views = InputViews {
             material: &self.material,
             split_sum: &split_sum.view,
-            tir: self.tir_unused.view_for(crate::shader::Tir::None),
+            tir: self.tir_unused.view_for(crate::variant::Tir::None),
             fgd_volume: &images.volume_view,
             fgd_plane: &images.plane_view,
         };

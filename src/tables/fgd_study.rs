@@ -12,7 +12,7 @@ use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::model::fgd::ExactFgd;
 use crate::model::Fgd as _;
-use crate::shader::{Fgd, G2};
+use crate::variant::{Fgd, G2};
 
 use super::belcour::Basis;
 use super::cache;

@@ -13,7 +13,7 @@ use crate::error::Result;
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::microfacet;
 use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_2D};
-use crate::shader::G2;
+use crate::variant::G2;
 use crate::vk::{
     submit_and_wait, upload_image, Access, BindingKind, Buffer, BufferDesc, DescriptorSet, Format,
     Image, ImageDesc, ImageState, ImageView, Resource,
@@ -54,7 +54,7 @@ impl SplitSumTable {
     pub fn load_or_build(gpu: &Gpu, g2: G2, size: u32, samples: u32) -> Result<Self> {
         let key = super::cache::Key {
             kind: "split-sum",
-            params: vec![size, samples, crate::shader::variant::Axis::code(g2)],
+            params: vec![size, samples, crate::variant::Axis::code(g2)],
             shader_hash: crate::shader::entry_hash("split_sum.comp.glsl"),
         };
         let dir = super::cache::dir();

@@ -4,7 +4,7 @@
 
 use crate::model::fgd::ExactFgd;
 use crate::model::Fgd as _;
-use crate::shader::G2;
+use crate::variant::G2;
 
 use super::fgd::{belcour_reference, BelcourTable, Grid};
 use super::fgd_study::{Errors, EXACT_RESOLUTION};

@@ -16,9 +16,9 @@ use crate::error::Result;
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::microfacet;
 use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_2D};
-use crate::shader::{Tir, G2};
 use crate::tables::cache;
 use crate::tables::{filter_axis, Texels};
+use crate::variant::{Tir, G2};
 use crate::vk::{
     submit_and_wait, upload_image, Access, BindingKind, Buffer, BufferDesc, DescriptorSet, Format,
     Image, ImageDesc, ImageState, ImageUsageFlags, ImageView, Resource,

@@ -36,7 +36,7 @@ use crate::imageio;
 use crate::material::Stack;
 use crate::profile::stats::MinMeanMax;
 use crate::render::scene::Camera;
-use crate::shader::{Model, VariantKey};
+use crate::variant::{Model, VariantKey};
 use crate::vk::{
     submit_frame, Acquired, Buffer, BufferDesc, DeviceSelector, Format, ImageState, InstanceDesc,
     Overlay, Semaphore, Surface, Swapchain,

@@ -10,8 +10,7 @@ use crate::error::{Error, Result};
 use crate::material::{gulbrandsen, presets, Stack};
 use crate::model::LayerParams;
 use crate::render::scene::Camera;
-use crate::shader::variant::Axis;
-use crate::shader::{Fgd, Model, Ndf, Tir, VariantKey, G2};
+use crate::variant::{Axis, Fgd, Model, Ndf, Tir, VariantKey, G2};
 
 use super::{orbit, stack_model, summary, ViewOptions, HISTORY};
 

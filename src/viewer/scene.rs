@@ -14,8 +14,8 @@ use crate::model::LayerParams;
 use crate::render::forward::ForwardPass;
 use crate::render::scene::{torus, uv_sphere, Camera};
 use crate::render::Renderer;
-use crate::shader::VariantKey;
 use crate::tables::environment::EnvDesc;
+use crate::variant::VariantKey;
 use crate::vk::{DeviceSelector, InstanceDesc};
 
 use super::panels::MeshKind;

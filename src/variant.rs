@@ -17,6 +17,9 @@
 //!
 //! Every combination is valid as a key; whether a device can run it (fp16) or a material fits
 //! it (`max_layers`) is checked where those are known.
+//!
+//! The model, the materials, the shaders and the tables all name variant axes, so the key lives
+//! below them and imports none of them (only `vk`, for [`ShadeSpec`]'s specialization constants).
 
 use std::fmt;
 use std::str::FromStr;
