@@ -14,8 +14,8 @@ use std::path::{Component, Path, PathBuf};
 /// Constants shared with GLSL; the shaders read them as macros.
 pub const HOST_DEFINES: &[(&str, u32)] = &[
     ("LAMINA_MAX_LAYERS_LIMIT", crate::variant::MAX_LAYERS_LIMIT),
-    ("LAMINA_TIR_SIZE", crate::tables::tir::DEFAULT_SIZE),
-    ("LAMINA_FGD_SIZE", crate::tables::fgd::SIZE),
+    ("LAMINA_TIR_SIZE", super::interface::TIR_TABLE_SIZE),
+    ("LAMINA_FGD_SIZE", super::interface::FGD_GRID_SIZE),
 ];
 
 #[derive(Debug, thiserror::Error)]

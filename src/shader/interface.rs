@@ -93,6 +93,16 @@ pub struct Binding {
 /// The descriptor set index of the shading inputs in every pipeline that shades.
 pub const SHADING_SET: u32 = 0;
 
+/// Texels per axis of the TIR table the shading set binds (`LAMINA_TIR_SIZE`, read by
+/// `glsl/include/lib/tir.glsl` to place texel centres): 64³, the size of the reference's
+/// table. The host builds the `lut32`/`lut16` table at this size (`tables::tir`).
+pub const TIR_TABLE_SIZE: u32 = 64;
+
+/// Texels per axis of every FGD grid the shading set binds (`LAMINA_FGD_SIZE`, read by
+/// `glsl/include/lib/fgd.glsl`): the reference's 64. The host builds the grids at this size
+/// (`tables::fgd`).
+pub const FGD_GRID_SIZE: u32 = 64;
+
 /// The shading set's bindings, as `glsl/include/bindings/shading.glsl` declares them. The
 /// material is a storage buffer, not a uniform buffer: lavapipe inlines uniform-buffer values
 /// that feed loop bounds into the shader and recompiles it at draw time (Mesa's

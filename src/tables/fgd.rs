@@ -19,7 +19,7 @@ use std::path::Path;
 use crate::error::{Error, Result};
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::{fresnel, microfacet};
-use crate::shader::interface::{material_buffer, InputViews, ShadingLayout};
+use crate::shader::interface::{material_buffer, InputViews, ShadingLayout, FGD_GRID_SIZE};
 use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_1D, LOCAL_SIZE_2D};
 use crate::tables::belcour::Basis;
 use crate::tables::cache;
@@ -32,8 +32,9 @@ use crate::vk::{
     DescriptorSet, Format, Image, ImageDesc, ImageState, ImageView, Resource,
 };
 
-/// Texels per axis of every FGD grid (the reference's 64; `LAMINA_FGD_SIZE` in GLSL).
-pub const SIZE: u32 = 64;
+/// Texels per axis of every FGD grid: the size the shaders sample ([`FGD_GRID_SIZE`], the
+/// reference's 64).
+pub const SIZE: u32 = FGD_GRID_SIZE;
 /// Hammersley samples per texel of the 4-D and η < 1 grids: they resolve the step of F at
 /// the critical angle (η < 1) to ~5e-4 (256 samples: 5e-3; tests/fgd.rs). The build shader
 /// holds at most 1024 in shared memory.

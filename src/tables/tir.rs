@@ -15,6 +15,7 @@ use std::path::Path;
 use crate::error::Result;
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::microfacet;
+use crate::shader::interface::TIR_TABLE_SIZE;
 use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_2D};
 use crate::tables::cache;
 use crate::tables::{filter_axis, Texels};
@@ -24,8 +25,8 @@ use crate::vk::{
     Image, ImageDesc, ImageState, ImageUsageFlags, ImageView, Resource,
 };
 
-/// 64³, the size of the reference's table.
-pub const DEFAULT_SIZE: u32 = 64;
+/// The size the shaders sample ([`TIR_TABLE_SIZE`]: 64³, the size of the reference's table).
+pub const DEFAULT_SIZE: u32 = TIR_TABLE_SIZE;
 /// Hammersley samples per texel; the estimate is within ~2e-3 of the integral (tests/tables.rs).
 pub const DEFAULT_SAMPLES: u32 = 1024;
 /// Sampled by the shaders, uploaded, and read back by the tests.
