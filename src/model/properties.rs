@@ -12,7 +12,7 @@
 
 use super::fgd::ExactFgd;
 use super::random::{case_seed, random_stack, Rng};
-use super::tir::{AnalyticTir, ConstantTir, CONSTANT_FRACTION};
+use super::tir::{trapped_fraction, AnalyticTir, ConstantTir, CONSTANT_FRACTION};
 use super::{tm2, tm6, Evaluation, Fgd, NoTir, Tir};
 use crate::material::Stack;
 use crate::variant::{Model, G2};
@@ -55,7 +55,7 @@ struct ExactTir;
 
 impl Tir for ExactTir {
     fn tir(&self, mu: f64, alpha: f64, eta: f64) -> f64 {
-        crate::tables::tir::cpu_reference(mu, alpha, eta, 6)
+        trapped_fraction(mu, alpha, eta, 6)
     }
 }
 

@@ -1,7 +1,9 @@
 //! The TIR modes without a table, in f64: the twins of `tir=constant` and `tir=analytic` in
-//! glsl/include/lib/tir.glsl (the table modes' twin is `tables::tir::TableTir`).
+//! glsl/include/lib/tir.glsl (the table modes' twin is `tables::tir::TableTir`), and the exact
+//! trapped fraction the table holds ([`trapped_fraction`], its reference).
 
-use super::Tir;
+use super::{microfacet, Tir};
+use crate::variant::G2;
 
 /// `tir=constant`: the talk's dummy constant in place of the table fetch.
 pub struct ConstantTir(pub f64);
@@ -48,6 +50,30 @@ impl Tir for AnalyticTir {
         let lambda = 0.5 * (-1.0 + (1.0 + a * a * (1.0 - c * c) / (c * c).max(1e-8)).sqrt());
         let g1 = 1.0 / (1.0 + lambda);
         fresnel_dielectric(wo_m.clamp(0.0, 1.0), eta) * g1
+    }
+}
+
+/// TIR(μ, α, η), the fraction of a GGX reflection lobe that total internal reflection keeps
+/// inside a layer of relative IOR η < 1 (what the TIR table of `tir=lut32`/`lut16` tabulates),
+/// in f64 by an `n`×`n` midpoint rule over the visible-normal sampler's two uniform variables
+/// (the same estimator as the GPU's, with a regular grid instead of Hammersley points).
+pub fn trapped_fraction(mu: f64, alpha: f64, eta: f64, n: u32) -> f64 {
+    let (mut trapped, mut total) = (0.0, 0.0);
+    microfacet::for_each_vndf_sample(mu.max(1e-3), alpha, n, |_, _, o| {
+        let w = if alpha > 0.0 {
+            microfacet::masking_g1(G2::Smith, o.z, alpha)
+        } else {
+            1.0
+        };
+        total += w;
+        if o.z * o.z < 1.0 - eta * eta {
+            trapped += w;
+        }
+    });
+    if total > 0.0 {
+        trapped / total
+    } else {
+        0.0
     }
 }
 

@@ -3,13 +3,14 @@
 //! catch a shader that drifted from its reference without running the full error studies.
 
 use crate::model::fgd::ExactFgd;
+use crate::model::tir::trapped_fraction;
 use crate::model::Fgd as _;
 use crate::variant::G2;
 
 use super::fgd::{belcour_reference, BelcourTable, Grid};
 use super::fgd_study::{Errors, EXACT_RESOLUTION};
 use super::split_sum::{self, SplitSumTable};
-use super::tir::{self, TirTable};
+use super::tir::TirTable;
 
 /// Points per axis of the references' midpoint rules (the 2-D tables and the TIR table).
 pub const REFERENCE_RESOLUTION: u32 = 256;
@@ -46,7 +47,7 @@ pub fn tir(table: &TirTable) -> f64 {
         .map(|(i, j)| {
             let k = 1 + (i * 7 + j * 3) % (n - 2);
             let (mu, alpha, eta) = table.coordinates(i, j, k);
-            let cpu = tir::cpu_reference(mu, alpha, eta, REFERENCE_RESOLUTION);
+            let cpu = trapped_fraction(mu, alpha, eta, REFERENCE_RESOLUTION);
             (f64::from(table.texel(i, j, k)) - cpu).abs()
         })
         .fold(0.0, f64::max)

@@ -6,7 +6,7 @@
 //! η = k/(n−1)), generated on the GPU by `tir_table.comp.glsl` and kept in two 3-D images: R32F
 //! (`lut32`) and R16F (`lut16`, the same values rounded to half floats). The shader samples with
 //! u = (x·(n−1) + ½)/n and a trilinear filter, which lands texel centres on the grid.
-//! [`cpu_reference`] integrates the same quantity in f64.
+//! [`trapped_fraction`](crate::model::tir::trapped_fraction) integrates the same quantity in f64.
 
 use half::f16;
 
@@ -14,12 +14,11 @@ use std::path::Path;
 
 use crate::error::Result;
 use crate::gpu::{ComputeKernel, Gpu};
-use crate::model::microfacet;
 use crate::shader::interface::TIR_TABLE_SIZE;
 use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_2D};
 use crate::tables::cache;
 use crate::tables::{filter_axis, Texels};
-use crate::variant::{Tir, G2};
+use crate::variant::Tir;
 use crate::vk::{
     submit_and_wait, upload_image, Access, BindingKind, Buffer, BufferDesc, DescriptorSet, Format,
     Image, ImageDesc, ImageState, ImageUsageFlags, ImageView, Resource,
@@ -261,29 +260,6 @@ pub struct TableTir<'a> {
 impl crate::model::Tir for TableTir<'_> {
     fn tir(&self, mu: f64, alpha: f64, eta: f64) -> f64 {
         self.table.sample(mu, alpha, eta, self.half)
-    }
-}
-
-/// TIR(μ, α, η) in f64 by an `n`×`n` midpoint rule over the visible-normal sampler's two
-/// uniform variables (the same estimator as the GPU's, with a regular grid instead of
-/// Hammersley points).
-pub fn cpu_reference(mu: f64, alpha: f64, eta: f64, n: u32) -> f64 {
-    let (mut trapped, mut total) = (0.0, 0.0);
-    microfacet::for_each_vndf_sample(mu.max(1e-3), alpha, n, |_, _, o| {
-        let w = if alpha > 0.0 {
-            microfacet::masking_g1(G2::Smith, o.z, alpha)
-        } else {
-            1.0
-        };
-        total += w;
-        if o.z * o.z < 1.0 - eta * eta {
-            trapped += w;
-        }
-    });
-    if total > 0.0 {
-        trapped / total
-    } else {
-        0.0
     }
 }
 
