@@ -3,8 +3,9 @@
 
 mod common;
 
+use lamina::material::random::random_stack;
 use lamina::model::hg;
-use lamina::model::random::{case_seed, random_stack, Rng};
+use lamina::model::random::{case_seed, Rng};
 use lamina::model::{
     tm2, tm6, Evaluation, LayerParams, NoTir, INDEX_MATCHED, IOR_AIR, REFLECTS_NOTHING,
 };

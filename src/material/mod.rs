@@ -37,7 +37,9 @@
 //! [`Stack::check_fits`] tests it against a variant's static array size.
 //!
 //! [`Stack::variant`] gives the variant a stack is shaded with for a key that names only some
-//! axes (the model and `max_layers` follow the stack; `variant.rs`).
+//! axes (the model and `max_layers` follow the stack; `variant.rs`). [`random`] draws valid
+//! stacks over the whole of these ranges for the property tests (`properties.rs` runs the f64
+//! model over them).
 //!
 //! [`MAX_LAYERS_LIMIT`]: crate::variant::MAX_LAYERS_LIMIT
 
@@ -45,6 +47,9 @@ mod artist;
 mod layer;
 mod parse;
 mod presets;
+#[cfg(test)]
+mod properties;
+pub mod random;
 #[cfg(test)]
 mod tests;
 mod variant;

@@ -16,8 +16,6 @@ pub mod fgd;
 pub mod fresnel;
 pub mod hg;
 pub mod microfacet;
-#[cfg(test)]
-mod properties;
 pub mod random;
 pub mod tir;
 pub mod tm2;

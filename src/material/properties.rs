@@ -6,15 +6,19 @@
 //!
 //! Every value must be finite, and every stack conserves energy: R + T ≤ 1 + 1e-6 and R, T ≥
 //! −1e-6 (a lossless stack is the tightest case). Over seeds 0–9 the largest excess is 1.3e-11,
-//! a 6-flux medium's I − R′ formed as a difference (`adding.rs`); elsewhere it is rounding
-//! (≤ 2e-15). The seed is printed; `LAMINA_PROPERTY_SEED=N` replays a run, and a failure prints
-//! the stack as a material file.
+//! a 6-flux medium's I − R′ formed as a difference (`model/adding.rs`); elsewhere it is
+//! rounding (≤ 2e-15). The seed is printed; `LAMINA_PROPERTY_SEED=N` replays a run, and a
+//! failure prints the stack as a material file.
+//!
+//! It lives with the materials, not in `model`, because its cases are material stacks
+//! (`random.rs`) and a failure prints one as a file: the model itself names no material.
 
-use super::fgd::ExactFgd;
-use super::random::{case_seed, random_stack, Rng};
-use super::tir::{trapped_fraction, AnalyticTir, ConstantTir, CONSTANT_FRACTION};
-use super::{tm2, tm6, Evaluation, Fgd, NoTir, Tir};
-use crate::material::Stack;
+use super::random::random_stack;
+use super::Stack;
+use crate::model::fgd::ExactFgd;
+use crate::model::random::{case_seed, Rng};
+use crate::model::tir::{trapped_fraction, AnalyticTir, ConstantTir, CONSTANT_FRACTION};
+use crate::model::{tm2, tm6, Evaluation, Fgd, NoTir, Tir};
 use crate::variant::{Model, G2};
 
 /// How many random stacks the test evaluates.
