@@ -1,5 +1,5 @@
 // Specialization constants of the shading passes. Mirrors `ShadeSpec` in
-// src/shader/variant.rs (ids 0…6 and order); the codes follow the value tables there.
+// src/variant.rs (ids 0…6 and order); the codes follow the value tables there.
 #ifndef LAMINA_SHARED_VARIANT
 #define LAMINA_SHARED_VARIANT
 
