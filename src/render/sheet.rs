@@ -66,8 +66,14 @@ const MIN_LABEL_PX: f64 = 7.0;
 /// Writes `text` into the bottom of the `t`×`t` tile at (`x0`, `y0`) of the RGBA `sheet`
 /// (`width` pixels wide): white on a darkened strip, at 1/16 of the tile (9 to 18 px), shrunk
 /// to fit the tile's width.
-fn label_tile(sheet: &mut [u8], width: usize, (x0, y0): (usize, usize), t: usize, text: &str) {
-    let font = TextFont::bundled();
+fn label_tile(
+    font: &TextFont,
+    sheet: &mut [u8],
+    width: usize,
+    (x0, y0): (usize, usize),
+    t: usize,
+    text: &str,
+) {
     let pad = 3;
     let mut size = (t as f64 / 16.0).clamp(9.0, 18.0);
     let (_, (w, _)) = font.layout(text, size);
@@ -125,6 +131,7 @@ pub fn render(
     let width = columns.len() * (t + GAP) + GAP;
     let height = rows.len() * (t + GAP) + GAP;
     let mut sheet: Vec<u8> = [40, 40, 40, 255].repeat(width * height);
+    let font = TextFont::bundled();
     for (r, row) in rows.iter().enumerate() {
         for (c, pass) in passes.iter().enumerate() {
             let frame = renderer.render(pass, &row.layers, tile, tile)?;
@@ -141,7 +148,7 @@ pub fn render(
                 sheet[dst..dst + t * 4].copy_from_slice(&rgba[y * t * 4..(y + 1) * t * 4]);
             }
             let label = format!("{} · {}", row.name, columns[c].label);
-            label_tile(&mut sheet, width, (x0, y0), t, &label);
+            label_tile(&font, &mut sheet, width, (x0, y0), t, &label);
         }
     }
     Ok((width, height, sheet))
@@ -159,7 +166,14 @@ mod tests {
     fn a_label_darkens_the_tile_bottom_and_writes_white_text_there_only() {
         let (t, width) = (192, 200);
         let mut sheet = grey(width, t + 8);
-        label_tile(&mut sheet, width, (4, 4), t, "varnished gold · model=tm2");
+        label_tile(
+            &TextFont::bundled(),
+            &mut sheet,
+            width,
+            (4, 4),
+            t,
+            "varnished gold · model=tm2",
+        );
         let pixel = |x: usize, y: usize| sheet[(y * width + x) * 4];
         let strip: Vec<u8> = (t - 10..t + 4)
             .flat_map(|y| (4..4 + t).map(move |x| (x, y)))
@@ -174,7 +188,14 @@ mod tests {
     #[test]
     fn tiles_too_small_for_legible_text_stay_unlabelled() {
         let mut sheet = grey(16, 16);
-        label_tile(&mut sheet, 16, (4, 4), 8, "varnished gold · model=tm2");
+        label_tile(
+            &TextFont::bundled(),
+            &mut sheet,
+            16,
+            (4, 4),
+            8,
+            "varnished gold · model=tm2",
+        );
         assert!(sheet.chunks_exact(4).all(|p| p[0] == 128));
     }
 }
