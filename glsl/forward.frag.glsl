@@ -4,7 +4,8 @@
 //   L = Σ_k e_k · L̃(dir_k, α_k).
 // MODEL = ggx: one GGX lobe of the top layer, energy F0·A + B (Karis 2013) — the yardstick
 // every transfer-matrix variant is divided by. MODEL = tm2 / tm6: the lobes of the
-// transfer-matrix model (lib/tm2.glsl, lib/tm6.glsl).
+// transfer-matrix model (lib/tm2.glsl, lib/tm6.glsl), or under MODE_BAKED the material's lobes
+// read from its table (bindings/shading.glsl's baked_lobes) at the view cosine.
 #include "shared/variant.glsl"
 #include "bindings/shading.glsl"
 #include "bindings/scene.glsl"
@@ -24,7 +25,7 @@ vec3 lobe_radiance(vec3 n, vec3 r, float alpha) {
 }
 
 vec3 shade_ggx(vec3 n, vec3 v, float n_dot_v) {
-    LayerGpu top = material.layers[0];
+    LayerGpu top = tm_layer(0u);
     float alpha = top.params.x;
     vec2 ab = texture(split_sum, vec2(n_dot_v, sqrt(alpha))).rg;
     real3 f0 = real3(f0_complex(top.ior.rgb, top.kappa.rgb));
@@ -57,10 +58,36 @@ vec3 shade_lobes(vec3 n, vec3 v, float n_dot_v) {
     return shade_sum;
 }
 
+// The baked lobes at the view cosine: each lobe's (weight, √α) interpolated linearly between
+// its two samples around √μ (render/baked.rs), then lit like the model's (lobe_radiance, with the mip read off
+// √α directly).
+vec3 shade_baked(vec3 n, vec3 v, float n_dot_v) {
+    float x = sqrt(n_dot_v) * float(BAKED_SIZE - 1u);
+    uint j = min(uint(x), BAKED_SIZE - 2u);
+    float f = x - float(j);
+    vec3 mirror = reflect(-v, n);
+    vec3 sum = vec3(0.0);
+    [[unroll]] for (uint k = 0u; k < LOBE_COUNT; ++k) {
+        uint at = k * BAKED_SIZE + j;
+        vec4 lobe = mix(baked_lobes[at], baked_lobes[at + 1u], f);
+        // .a is the perceptual roughness √α, the cube's mip axis.
+        vec3 dir = ibl_dominant_direction(n, tm_bit(RETRO_MASK, k) ? v : mirror, lobe.a * lobe.a);
+        sum += lobe.rgb * textureLod(prefiltered, dir, lobe.a * (frame.params.x - 1.0)).rgb;
+    }
+    return sum;
+}
+
 void main() {
     vec3 n = normalize(world_normal);
     vec3 v = normalize(frame.camera_pos.xyz - world_position);
     float n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
-    vec3 radiance = MODEL == MODEL_GGX ? shade_ggx(n, v, n_dot_v) : shade_lobes(n, v, n_dot_v);
+    vec3 radiance;
+    if (MODEL == MODEL_GGX) {
+        radiance = shade_ggx(n, v, n_dot_v);
+    } else if (MODE == MODE_BAKED) {
+        radiance = shade_baked(n, v, n_dot_v);
+    } else {
+        radiance = shade_lobes(n, v, n_dot_v);
+    }
     color = vec4(radiance, 1.0);
 }

@@ -1,7 +1,9 @@
 #version 460
 // Evaluates the model at given view cosines for one stack: the GPU side of `lamina eval
 // --backend gpu` and of the GPU-vs-CPU tests. Same library code as the forward pass.
-// Output per sample, `stride` vec4s: (R, lobe count), (T, 0), then (weight, α) per lobe.
+// Output per sample, `stride` vec4s: (R, lobe count), (T, retro mask), then (weight, α) per
+// lobe; the retro mask's bits (bit k: lobe k is lit around the view, LOBE_RETRO; the first 32
+// lobes) are stored as the float's bits.
 #include "shared/variant.glsl"
 #include "bindings/shading.glsl"
 
@@ -25,10 +27,14 @@ layout(push_constant) uniform Push {
 // Where tm_emit_lobe writes: the sample's first lobe slot and how many are filled.
 uint eval_first_lobe;
 uint eval_lobes;
+uint eval_retro;
 
 void tm_emit_lobe(vec3 weight, float alpha, uint kind) {
     if (eval_lobes < TM_MAX_LOBES) {
         results.values[eval_first_lobe + eval_lobes] = vec4(weight, alpha);
+    }
+    if (kind == LOBE_RETRO && eval_lobes < 32u) {
+        eval_retro |= 1u << eval_lobes;
     }
     eval_lobes++;
 }
@@ -41,6 +47,7 @@ void main() {
     uint base = i * push.stride;
     eval_first_lobe = base + 2u;
     eval_lobes = 0u;
+    eval_retro = 0u;
     vec3 reflectance;
     vec3 transmittance;
     float mu = samples.cos_theta[i];
@@ -48,5 +55,5 @@ void main() {
         ? tm6_evaluate(mu, reflectance, transmittance)
         : tm2_evaluate(mu, reflectance, transmittance);
     results.values[base] = vec4(reflectance, float(count));
-    results.values[base + 1u] = vec4(transmittance, 0.0);
+    results.values[base + 1u] = vec4(transmittance, uintBitsToFloat(eval_retro));
 }

@@ -1,6 +1,7 @@
 //! The variant key: every axis the published study swept, as one typed value.
 //!
-//! It prints and parses as `model=tm2,max_layers=5,fp16=off,tir=none,fgd=karis,g2=height-correlated,ndf=ggx`
+//! It prints and parses as
+//! `model=tm2,max_layers=5,fp16=off,tir=none,fgd=karis,g2=height-correlated,ndf=ggx,mode=generic`
 //! so the CLI, sweep files and result rows share one spelling. Parsing accepts any subset of
 //! the axes (the rest take their defaults) in any order; printing always gives all axes in the
 //! order above.
@@ -14,6 +15,14 @@
 //! | fgd | `karis`, `belcour`, `4d`, `resampled4d` | spec constant 3 |
 //! | g2 | `height-correlated`, `smith`, `schlick`, `earl` | spec constant 4 |
 //! | ndf | `ggx`, `karis` | spec constant 5 |
+//! | mode | `generic`, `specialized`, `specialized-values`, `baked` | spec constant 7 (+ the material's structure, ids 8…17, and values, ids 32…) |
+//!
+//! `mode` picks how much of the material the pipeline knows: nothing (`generic`, the talk's
+//! shader: parameters read at run time, arrays sized by `max_layers`), its structure
+//! (`specialized`: layer count and each layer's kind as constants, so loops unroll and dead
+//! paths go), its structure and values (`specialized-values`), or its lobes tabulated over the
+//! view cosine (`baked`). Under every mode but `generic` one pipeline serves one material, and
+//! `max_layers` does not matter: the arrays have the material's own size.
 //!
 //! Every combination is valid as a key; whether a device can run it (fp16) or a material fits
 //! it (`max_layers`) is checked where those are known.
@@ -152,6 +161,30 @@ axis!(
     }
 );
 
+axis!(
+    /// How much of the material a pipeline is built for.
+    Mode, "mode", {
+        /// Parameters read at run time, arrays sized by `max_layers`: one pipeline for every
+        /// material.
+        Generic = "generic",
+        /// The layer count and each layer's structure as constants: one pipeline per
+        /// material structure.
+        Specialized = "specialized",
+        /// Structure and every numeric parameter as constants: one pipeline per material.
+        SpecializedValues = "specialized-values",
+        /// A spatially uniform material's lobes tabulated over the view cosine: one table
+        /// fetch and one environment fetch per lobe.
+        Baked = "baked",
+    }
+);
+
+impl Mode {
+    /// Whether a pipeline of this mode is built for one material.
+    pub fn per_material(self) -> bool {
+        self != Mode::Generic
+    }
+}
+
 /// One shader variant.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct VariantKey {
@@ -162,6 +195,7 @@ pub struct VariantKey {
     pub fgd: Fgd,
     pub g2: G2,
     pub ndf: Ndf,
+    pub mode: Mode,
 }
 
 impl Default for VariantKey {
@@ -174,16 +208,54 @@ impl Default for VariantKey {
             fgd: Fgd::Karis,
             g2: G2::HeightCorrelated,
             ndf: Ndf::Ggx,
+            mode: Mode::Generic,
         }
     }
 }
 
-pub const AXES: &[&str] = &["model", "max_layers", "fp16", "tir", "fgd", "g2", "ndf"];
+pub const AXES: &[&str] = &[
+    "model",
+    "max_layers",
+    "fp16",
+    "tir",
+    "fgd",
+    "g2",
+    "ndf",
+    "mode",
+];
+
+/// Layers whose numeric values a `specialized-values` pipeline holds as constants, and the
+/// constants per layer: ids `VALUE_ID_BASE + VALUES_PER_LAYER·layer + field`, the fields in
+/// [`LayerValue`]'s order.
+pub const VALUE_ID_BASE: u32 = 32;
+pub const VALUES_PER_LAYER: u32 = 16;
+
+/// The numeric fields of a layer as `specialized-values` constants (field index = position).
+pub const LAYER_VALUES: [&str; 15] = [
+    "IOR_R",
+    "IOR_G",
+    "IOR_B",
+    "KAPPA_R",
+    "KAPPA_G",
+    "KAPPA_B",
+    "SIGMA_S_R",
+    "SIGMA_S_G",
+    "SIGMA_S_B",
+    "SIGMA_A_R",
+    "SIGMA_A_G",
+    "SIGMA_A_B",
+    "ALPHA",
+    "DEPTH",
+    "G",
+];
 
 /// The specialization constants of the shading passes, mirrored in
-/// `glsl/include/shared/variant.glsl` (ids 0…6).
+/// `glsl/include/shared/variant.glsl`: the variant's axes (ids 0…7), the structure of the
+/// material a per-material pipeline is built for (ids 8…17, zero under `mode=generic`) and its
+/// values (`specialized-values`: ids [`VALUE_ID_BASE`]…). Layer masks hold bit `i` for layer
+/// `i` (top first).
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ShadeSpec {
     pub model: u32,
     pub max_layers: u32,
@@ -194,17 +266,66 @@ pub struct ShadeSpec {
     /// The work-group width of a compute entry point that shades, set from its interface when
     /// the pipeline is made (`shader::kernel::WorkGroupSpec`); the fragment pass has none.
     pub local_size_x: u32,
+    pub mode: u32,
+    /// The material's layer count (per-material modes).
+    pub layer_count: u32,
+    /// Interfaces with α = 0: Fresnel, no FGD lookup.
+    pub smooth_mask: u32,
+    /// 1 when the last layer is a conductor.
+    pub conductor_base: u32,
+    /// Layers with a medium (6-flux, depth > 0).
+    pub medium_mask: u32,
+    /// Dielectric interfaces denser below than above (η_ij ≥ 1): TIR only for light going up.
+    pub denser_mask: u32,
+    /// Index-matched interfaces (the model's skip).
+    pub matched_mask: u32,
+    /// Interfaces that refract but reflect nothing (|η_ij − 1| below the model's threshold).
+    pub clear_mask: u32,
+    /// `baked`: the lobe count and which lobes are lit around the view (back-scatter).
+    pub lobe_count: u32,
+    pub retro_mask: u32,
+    /// `baked`: view-cosine samples per lobe.
+    pub baked_size: u32,
+    /// `specialized-values`: the layers' values (see [`LAYER_VALUES`]).
+    pub values: [[f32; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
 }
 
-crate::spec_constants!(ShadeSpec {
-    model = 0,
-    max_layers = 1,
-    tir = 2,
-    fgd = 3,
-    g2 = 4,
-    ndf = 5,
-    local_size_x = 6,
-});
+impl Default for ShadeSpec {
+    fn default() -> Self {
+        VariantKey::default().spec()
+    }
+}
+
+const AXIS_ENTRIES: usize = 18;
+const VALUE_ENTRIES: usize = (MAX_LAYERS_LIMIT * VALUES_PER_LAYER) as usize;
+
+const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENTRIES] {
+    let mut out = [crate::vk::SpecEntry {
+        id: 0,
+        offset: 0,
+        size: 4,
+    }; AXIS_ENTRIES + VALUE_ENTRIES];
+    // ids 0…17 are the u32 fields in declaration order, 4 bytes apart from offset 0.
+    let mut i = 0;
+    while i < AXIS_ENTRIES {
+        out[i].id = i as u32;
+        out[i].offset = 4 * i;
+        i += 1;
+    }
+    let mut v = 0;
+    while v < VALUE_ENTRIES {
+        out[AXIS_ENTRIES + v].id = VALUE_ID_BASE + v as u32;
+        out[AXIS_ENTRIES + v].offset = std::mem::offset_of!(ShadeSpec, values) + 4 * v;
+        v += 1;
+    }
+    out
+}
+
+const _: () = assert!(std::mem::offset_of!(ShadeSpec, baked_size) == 4 * (AXIS_ENTRIES - 1));
+
+impl crate::vk::SpecConstants for ShadeSpec {
+    const ENTRIES: &'static [crate::vk::SpecEntry] = &shade_spec_entries();
+}
 
 impl VariantKey {
     pub fn spec(&self) -> ShadeSpec {
@@ -216,6 +337,18 @@ impl VariantKey {
             g2: self.g2.code(),
             ndf: self.ndf.code(),
             local_size_x: 1,
+            mode: self.mode.code(),
+            layer_count: 0,
+            smooth_mask: 0,
+            conductor_base: 0,
+            medium_mask: 0,
+            denser_mask: 0,
+            matched_mask: 0,
+            clear_mask: 0,
+            lobe_count: 0,
+            retro_mask: 0,
+            baked_size: 0,
+            values: [[0.0; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
         }
     }
 
@@ -233,14 +366,15 @@ impl fmt::Display for VariantKey {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "model={},max_layers={},fp16={},tir={},fgd={},g2={},ndf={}",
+            "model={},max_layers={},fp16={},tir={},fgd={},g2={},ndf={},mode={}",
             self.model,
             self.max_layers,
             if self.fp16 { "on" } else { "off" },
             self.tir,
             self.fgd,
             self.g2,
-            self.ndf
+            self.ndf,
+            self.mode
         )
     }
 }
@@ -296,6 +430,7 @@ impl VariantKey {
                 "fgd" => key.fgd = Fgd::parse_value(value)?,
                 "g2" => key.g2 = G2::parse_value(value)?,
                 "ndf" => key.ndf = Ndf::parse_value(value)?,
+                "mode" => key.mode = Mode::parse_value(value)?,
                 _ => {
                     return Err(VariantError::UnknownAxis {
                         key: axis.into(),
@@ -318,7 +453,7 @@ mod tests {
         let text = VariantKey::default().to_string();
         assert_eq!(
             text,
-            "model=ggx,max_layers=4,fp16=off,tir=none,fgd=karis,g2=height-correlated,ndf=ggx"
+            "model=ggx,max_layers=4,fp16=off,tir=none,fgd=karis,g2=height-correlated,ndf=ggx,mode=generic"
         );
         assert_eq!(text.parse::<VariantKey>().unwrap(), VariantKey::default());
     }
@@ -333,15 +468,18 @@ mod tests {
                         for &(_, ndf) in Ndf::VALUES {
                             for fp16 in [false, true] {
                                 for max_layers in [1, 7, 16] {
-                                    keys.push(VariantKey {
-                                        model,
-                                        max_layers,
-                                        fp16,
-                                        tir,
-                                        fgd,
-                                        g2,
-                                        ndf,
-                                    });
+                                    for &(_, mode) in Mode::VALUES {
+                                        keys.push(VariantKey {
+                                            model,
+                                            max_layers,
+                                            fp16,
+                                            tir,
+                                            fgd,
+                                            g2,
+                                            ndf,
+                                            mode,
+                                        });
+                                    }
                                 }
                             }
                         }
@@ -400,22 +538,42 @@ mod tests {
     }
 
     #[test]
-    fn spec_codes_follow_the_value_tables() {
-        let k: VariantKey = "model=tm6,max_layers=9,tir=lut16,fgd=resampled4d,g2=earl,ndf=karis"
-            .parse()
-            .unwrap();
+    fn spec_entries_are_the_fields_in_order_then_the_values() {
+        use crate::vk::SpecConstants;
+        let entries = ShadeSpec::ENTRIES;
+        assert_eq!(entries.len(), AXIS_ENTRIES + VALUE_ENTRIES);
+        assert_eq!(entries[7].offset, std::mem::offset_of!(ShadeSpec, mode));
         assert_eq!(
-            k.spec(),
-            ShadeSpec {
-                model: 2,
-                max_layers: 9,
-                tir: 4,
-                fgd: 3,
-                g2: 3,
-                ndf: 1,
-                local_size_x: 1,
-            }
+            entries[17].offset,
+            std::mem::offset_of!(ShadeSpec, baked_size)
         );
+        let last = entries.last().unwrap();
+        assert_eq!(last.id, VALUE_ID_BASE + VALUE_ENTRIES as u32 - 1);
+        assert_eq!(last.offset + last.size, std::mem::size_of::<ShadeSpec>());
+    }
+
+    #[test]
+    fn spec_codes_follow_the_value_tables() {
+        let k: VariantKey =
+            "model=tm6,max_layers=9,tir=lut16,fgd=resampled4d,g2=earl,ndf=karis,mode=baked"
+                .parse()
+                .unwrap();
+        let spec = k.spec();
+        assert_eq!(
+            [
+                spec.model,
+                spec.max_layers,
+                spec.tir,
+                spec.fgd,
+                spec.g2,
+                spec.ndf,
+                spec.local_size_x,
+                spec.mode
+            ],
+            [2, 9, 4, 3, 3, 1, 1, 3]
+        );
+        // The material's structure comes from shader::specialize, not from the key.
+        assert_eq!(spec.layer_count, 0);
         assert!(k.defines().is_empty());
         let fp16: VariantKey = "fp16=on".parse().unwrap();
         assert_eq!(fp16.defines(), vec![("LAMINA_FP16", "1")]);

@@ -77,3 +77,62 @@ fn instruction_counts_order_the_variants() {
         "lavapipe emulates fp16: {tm2_4_fp16} <= fp32 {tm2_4}"
     );
 }
+
+/// Issue 11's gate: on a two-layer preset, per-material pipelines cost less than the generic
+/// one (baked < specialized < generic at max_layers 16), and a specialized pipeline does not
+/// depend on `max_layers` at all (its arrays have the material's own size).
+#[test]
+fn specialization_orders_the_counts() {
+    let stack = Stack::resolve("varnished-gold").unwrap();
+    assert_eq!(stack.layers.len(), 2);
+    let keys = [
+        "model=tm2,max_layers=16",
+        "model=tm2,max_layers=4,mode=specialized",
+        "model=tm2,max_layers=16,mode=specialized",
+        "model=tm2,mode=specialized-values",
+        "model=tm2,mode=baked",
+    ];
+    let cases: Vec<Case> = keys
+        .iter()
+        .map(|k| Case {
+            variant: k.parse::<VariantKey>().unwrap(),
+            stack: stack.clone(),
+        })
+        .collect();
+    let env = common::repo_path("assets/env/studio.exr");
+    let counts = count_instructions(
+        &CountRequest {
+            exe: Path::new(env!("CARGO_BIN_EXE_lamina")),
+            global_args: Vec::new(),
+            env_map: &env,
+            cases: &cases,
+            width: 32,
+            height: 32,
+        },
+        |_, _| {},
+    )
+    .expect("callgrind worker");
+    for (k, n) in keys.iter().zip(&counts) {
+        println!("{:>14} JIT {:>14} all  {k}", n.jit, n.total);
+    }
+    let jit: Vec<u64> = counts.iter().map(|c| c.jit).collect();
+    let [generic_16, specialized_4, specialized_16, values, baked] = jit[..] else {
+        panic!("one count per case");
+    };
+    assert_eq!(
+        specialized_4, specialized_16,
+        "a specialized pipeline's count depends on max_layers"
+    );
+    assert!(
+        specialized_4 < generic_16,
+        "specialized {specialized_4} >= generic max_layers=16 {generic_16}"
+    );
+    assert!(
+        values < specialized_4,
+        "specialized-values {values} >= specialized {specialized_4}"
+    );
+    assert!(
+        baked < specialized_4,
+        "baked {baked} >= specialized {specialized_4}"
+    );
+}

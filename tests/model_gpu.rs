@@ -25,7 +25,7 @@ fn single_conductor_renders_exactly_like_the_ggx_baseline() {
     let mut renderer = Renderer::new(&gpu, &common::studio(), small_env()).unwrap();
     let stack = common::gold();
     let render = |renderer: &mut Renderer, key: &str| {
-        let pass = renderer.prepare(key.parse().unwrap()).unwrap();
+        let pass = renderer.prepare(key.parse().unwrap(), &stack).unwrap();
         renderer.render(&pass, &stack, 128, 96).unwrap().pixels
     };
     let ggx = render(&mut renderer, "model=ggx");

@@ -185,7 +185,7 @@ fn six_flux_emits_its_largest_lobe_count_on_the_gpu() {
         for (&mu, g) in cosines.iter().zip(&on_gpu) {
             let cpu = tm6::evaluate(&stack, mu, &evaluator.fgd_lookup(), &NoTir);
             assert_eq!(cpu.lobes.len(), 6 * n - 2, "CPU lobe count at μ = {mu}");
-            assert_eq!(evaluator.max_lobes(), 6 * n - 2);
+            assert_eq!(evaluator.max_lobes(n), 6 * n - 2);
             let err = compare(g, &cpu);
             assert!(
                 err <= 1e-3,

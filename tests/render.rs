@@ -21,7 +21,9 @@ fn default_render_is_finite_sphere_differs_and_sky_matches_environment() {
     let gpu = common::gpu();
     let studio = common::studio();
     let mut renderer = Renderer::new(&gpu, &studio, EnvDesc::default()).unwrap();
-    let pass = renderer.prepare(VariantKey::default()).unwrap();
+    let pass = renderer
+        .prepare(VariantKey::default(), &common::gold())
+        .unwrap();
     let (w, h) = (320, 180);
     let frame = renderer.render(&pass, &common::gold(), w, h).unwrap();
     assert_eq!(frame.pixels.len(), (w * h) as usize);
@@ -85,7 +87,9 @@ fn timestamps_are_ordered_and_full_screen_invocations_match_pixels() {
         samples: 16,
     };
     let mut renderer = Renderer::new(&gpu, &common::studio(), desc).unwrap();
-    let pass = renderer.prepare(VariantKey::default()).unwrap();
+    let pass = renderer
+        .prepare(VariantKey::default(), &common::gold())
+        .unwrap();
     // lavapipe (Mesa 22.3) counts one extra 8-pixel block per row of a full-screen draw
     // (measured: 24960 invocations at 200×120, 233280 at 640×360), so the 1% bound needs a
     // frame wider than 800 pixels there; 1280×720 is also the size users profile at.
@@ -121,7 +125,9 @@ fn fp16_variant_renders_finite_pixels() {
         samples: 16,
     };
     let mut renderer = Renderer::new(&gpu, &common::studio(), desc).unwrap();
-    let pass = renderer.prepare("fp16=on".parse().unwrap()).unwrap();
+    let pass = renderer
+        .prepare("fp16=on".parse().unwrap(), &common::gold())
+        .unwrap();
     let frame = renderer.render(&pass, &common::gold(), 96, 64).unwrap();
     assert!(frame.pixels.iter().flatten().all(|c| c.is_finite()));
     common::assert_validation_clean(&gpu);

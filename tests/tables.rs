@@ -144,7 +144,7 @@ fn every_tir_and_fgd_value_renders_every_preset_finite() {
             let variant: VariantKey = format!("model={model},{axis},max_layers=5")
                 .parse()
                 .unwrap();
-            let pass = renderer.prepare(variant).unwrap();
+            let pass = renderer.prepare(variant, &[]).unwrap();
             for stack in &stacks {
                 let frame = renderer.render(&pass, &stack.params(), 40, 40).unwrap();
                 assert!(

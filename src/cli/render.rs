@@ -49,7 +49,7 @@ pub fn run(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
     let layers = stack.params();
     let gpu = global.open_gpu()?;
     let mut renderer = Renderer::new(&gpu, &equirect, EnvDesc::default())?;
-    let pass = renderer.prepare(variant)?;
+    let pass = renderer.prepare(variant, &layers)?;
     let (width, height) = (scene.size.width, scene.size.height);
     for _ in 0..args.warmup {
         renderer.render(&pass, &layers, width, height)?;

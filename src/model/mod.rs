@@ -85,7 +85,14 @@ pub trait Fgd {
 /// (A + B of a smooth interface rounds above 1): an albedo above 1 is a component that makes
 /// light, and under a near-lossless scatterer the gap's denominator 1 − R′r went negative (the
 /// f64 model reflected 67 676).
+///
+/// A smooth interface (α = 0) reflects exactly its Fresnel reflectance (the directional albedo
+/// of a mirror), which no table is needed for: every FGD source gives it, and the shaders skip
+/// the table there too (`tm_albedo_rgb`; a specialized pipeline knows it statically).
 pub fn albedo(fgd: &dyn Fgd, mu: f64, alpha: f64, eta: f64, kappa: f64) -> f64 {
+    if alpha == 0.0 {
+        return fresnel::conductor(mu, eta, kappa);
+    }
     fgd.fgd(mu, alpha, eta, kappa).clamp(0.0, 1.0)
 }
 

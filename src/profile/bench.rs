@@ -133,19 +133,19 @@ pub fn run(
     }
     let cases = config.with_baselines();
     let mut renderer = Renderer::new(gpu, equirect, EnvDesc::default())?;
+    let layers: Vec<Vec<LayerParams>> = cases.iter().map(|c| c.stack.params()).collect();
     let mut passes: Vec<ForwardPass> = Vec::new();
     let mut pass_of = Vec::with_capacity(cases.len());
-    for case in &cases {
-        let index = match passes.iter().position(|p| p.variant == case.variant) {
+    for (case, stack) in cases.iter().zip(&layers) {
+        let index = match passes.iter().position(|p| p.shades(case.variant, stack)) {
             Some(i) => i,
             None => {
-                passes.push(renderer.prepare(case.variant)?);
+                passes.push(renderer.prepare(case.variant, stack)?);
                 passes.len() - 1
             }
         };
         pass_of.push(index);
     }
-    let layers: Vec<Vec<LayerParams>> = cases.iter().map(|c| c.stack.params()).collect();
     let mut times = vec![Vec::new(); cases.len()];
     let mut invocations = vec![None; cases.len()];
     let total = (config.warmup + config.frames) * cases.len() as u32;

@@ -57,17 +57,18 @@ pub fn worker(
     let mut renderer = Renderer::new(gpu, equirect, WORKER_ENV)?;
     let mut passes: Vec<ForwardPass> = Vec::new();
     for case in cases {
-        if !passes.iter().any(|p| p.variant == case.variant) {
-            passes.push(renderer.prepare(case.variant)?);
+        let layers = case.stack.params();
+        if !passes.iter().any(|p| p.shades(case.variant, &layers)) {
+            passes.push(renderer.prepare(case.variant, &layers)?);
         }
     }
     for (i, case) in cases.iter().enumerate() {
+        let layers = case.stack.params();
         let pass = passes
             .iter()
-            .find(|p| p.variant == case.variant)
+            .find(|p| p.shades(case.variant, &layers))
             .expect("prepared above");
         // llvmpipe compiles a fragment-shader variant at its first draw: keep that out.
-        let layers = case.stack.params();
         renderer.render(pass, &layers, width, height)?;
         renderer.render_observed(pass, &layers, width, height, &mut |phase| match phase {
             ShadedPhase::Before => callgrind::start_instrumentation(),

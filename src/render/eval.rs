@@ -7,8 +7,9 @@ use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::{Evaluation, LayerParams, Lobe};
 use crate::shader::interface::material_buffer;
 use crate::shader::kernel::{KernelInterface, LOCAL_SIZE_1D};
+use crate::shader::specialize::shade_spec;
 use crate::tables::fgd::FgdLookup;
-use crate::variant::{Model, VariantKey};
+use crate::variant::{Mode, Model, ShadeSpec, VariantKey};
 use crate::vk::{
     submit_and_wait, Access, BindingKind, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
     Resource,
@@ -85,8 +86,16 @@ pub struct GpuEvaluator<'g> {
     pub variant: VariantKey,
     /// Set 0: the tables the variant samples (and their CPU twins).
     pub inputs: ShadingInputs<'g>,
-    /// Set 1: the view cosines in, the results out.
-    kernel: ComputeKernel,
+    /// Set 1: the view cosines in, the results out. `None` under a per-material mode, whose
+    /// kernel is built for each stack evaluated.
+    kernel: Option<ComputeKernel>,
+}
+
+/// One evaluation on the GPU and which of its lobes are lit around the view (bit k: lobe k
+/// back-scatters, `LOBE_RETRO`; the first 32 lobes).
+pub struct GpuEvaluation {
+    pub evaluation: Evaluation,
+    pub retro_mask: u32,
 }
 
 impl<'g> GpuEvaluator<'g> {
@@ -102,21 +111,41 @@ impl<'g> GpuEvaluator<'g> {
                 gpu.device.report.name
             )));
         }
+        if variant.mode == Mode::Baked {
+            return Err(Error::Unsupported(format!(
+                "variant {variant}: mode=baked tabulates the lobes of mode=generic (the \
+                 evaluator runs the model); evaluate mode=generic, specialized or \
+                 specialized-values"
+            )));
+        }
         let mut inputs = ShadingInputs::new(gpu)?;
         inputs.prepare(variant)?;
-        let kernel = ComputeKernel::build(
-            gpu,
-            &KERNEL,
-            &variant.defines(),
-            &[&inputs.layout.set_layout],
-            variant.spec(),
-        )?;
+        let kernel = if variant.mode.per_material() {
+            None
+        } else {
+            Some(Self::kernel(gpu, &inputs, variant, variant.spec())?)
+        };
         Ok(Self {
             gpu,
             variant,
             inputs,
             kernel,
         })
+    }
+
+    fn kernel(
+        gpu: &Gpu,
+        inputs: &ShadingInputs<'_>,
+        variant: VariantKey,
+        spec: ShadeSpec,
+    ) -> Result<ComputeKernel> {
+        ComputeKernel::build(
+            gpu,
+            &KERNEL,
+            &variant.defines(),
+            &[&inputs.layout.set_layout],
+            spec,
+        )
     }
 
     /// The CPU twin of the FGD lookups the kernel makes.
@@ -131,9 +160,15 @@ impl<'g> GpuEvaluator<'g> {
         self.inputs.tir_lookup(self.variant)
     }
 
-    /// Most lobes one evaluation can emit for this variant (the shader's `TM_MAX_LOBES`).
-    pub fn max_lobes(&self) -> usize {
-        let n = self.variant.max_layers as usize;
+    /// Most lobes one evaluation of a stack of `layers` layers can emit under this variant
+    /// (the shader's `TM_MAX_LOBES`, whose MAX_LAYERS is the stack's own size under a
+    /// per-material mode).
+    pub fn max_lobes(&self, layers: usize) -> usize {
+        let n = if self.variant.mode.per_material() {
+            layers
+        } else {
+            self.variant.max_layers as usize
+        };
         match self.variant.model {
             Model::Tm6 => 6 * n - 2,
             _ => n,
@@ -142,21 +177,48 @@ impl<'g> GpuEvaluator<'g> {
 
     /// Evaluates `layers` (top first) at each view cosine.
     pub fn evaluate(&self, layers: &[LayerParams], cosines: &[f64]) -> Result<Vec<Evaluation>> {
-        let max_layers = self.variant.max_layers as usize;
-        if layers.is_empty() || layers.len() > max_layers {
-            return Err(Error::Unsupported(format!(
-                "the stack has {} layer(s); variant {} holds 1..={max_layers}",
-                layers.len(),
-                self.variant
-            )));
-        }
+        Ok(self
+            .evaluate_lobes(layers, cosines)?
+            .into_iter()
+            .map(|e| e.evaluation)
+            .collect())
+    }
+
+    /// [`GpuEvaluator::evaluate`], with each evaluation's lobe kinds.
+    pub fn evaluate_lobes(
+        &self,
+        layers: &[LayerParams],
+        cosines: &[f64],
+    ) -> Result<Vec<GpuEvaluation>> {
+        let specialized;
+        let kernel = match &self.kernel {
+            Some(kernel) => {
+                let max_layers = self.variant.max_layers as usize;
+                if layers.is_empty() || layers.len() > max_layers {
+                    return Err(Error::Unsupported(format!(
+                        "the stack has {} layer(s); variant {} holds 1..={max_layers}",
+                        layers.len(),
+                        self.variant
+                    )));
+                }
+                kernel
+            }
+            None => {
+                let spec = shade_spec(self.variant, layers, None)
+                    .map_err(|e| Error::Unsupported(format!("variant {}: {e}", self.variant)))?;
+                specialized = Self::kernel(self.gpu, &self.inputs, self.variant, spec)?;
+                &specialized
+            }
+        };
         if cosines.is_empty() {
             return Ok(Vec::new());
         }
         let device = &self.gpu.device;
-        let stride = 2 + self.max_lobes();
+        let stride = 2 + self.max_lobes(layers.len());
         let material = material_buffer(device, layers, "eval material")?;
-        let shading = self.inputs.bind(self.variant, &material, "eval shading")?;
+        let shading = self
+            .inputs
+            .bind(self.variant, &material, None, "eval shading")?;
         let samples: Vec<f32> = cosines.iter().map(|&c| c as f32).collect();
         let samples = Buffer::with_data(
             device,
@@ -169,12 +231,12 @@ impl<'g> GpuEvaluator<'g> {
             BufferDesc::readback((cosines.len() * stride * 16) as u64),
             "eval results",
         )?;
-        let mut set = DescriptorSet::new(device, &self.kernel.set_layout, "eval")?;
+        let mut set = DescriptorSet::new(device, &kernel.set_layout, "eval")?;
         set.write(0, Resource::Buffer(&samples))
             .write(1, Resource::Buffer(&results));
         let count = cosines.len() as u32;
         submit_and_wait(device, "eval", |rec| {
-            self.kernel.record_dispatch(
+            kernel.record_dispatch(
                 rec,
                 &[&shading, &set],
                 &Push {
@@ -191,18 +253,22 @@ impl<'g> GpuEvaluator<'g> {
     }
 }
 
-fn unpack(chunk: &[[f32; 4]]) -> Evaluation {
+fn unpack(chunk: &[[f32; 4]]) -> GpuEvaluation {
     let rgb = |v: [f32; 4]| [f64::from(v[0]), f64::from(v[1]), f64::from(v[2])];
     let lobe_count = chunk[0][3] as usize;
-    Evaluation {
-        reflectance: rgb(chunk[0]),
-        transmittance: rgb(chunk[1]),
-        lobes: chunk[2..2 + lobe_count]
-            .iter()
-            .map(|&v| Lobe {
-                weight: rgb(v),
-                roughness: f64::from(v[3]),
-            })
-            .collect(),
+    GpuEvaluation {
+        evaluation: Evaluation {
+            reflectance: rgb(chunk[0]),
+            transmittance: rgb(chunk[1]),
+            lobes: chunk[2..2 + lobe_count]
+                .iter()
+                .map(|&v| Lobe {
+                    weight: rgb(v),
+                    roughness: f64::from(v[3]),
+                })
+                .collect(),
+        },
+        // The kernel stores the mask's bits, not a value (tm_eval.comp.glsl).
+        retro_mask: chunk[1][3].to_bits(),
     }
 }

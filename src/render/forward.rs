@@ -1,20 +1,34 @@
-//! The shaded pass: the sphere, lit by the prefiltered environment, in one shader variant.
+//! The shaded pass: the sphere, lit by the prefiltered environment, in one shader variant —
+//! for every material (`mode=generic`) or for one (every other mode: the pass keeps the
+//! material it was built for, and a baked material's lobe table).
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
-use crate::variant::VariantKey;
-use crate::vk::{Format, GraphicsDesc, Pipeline, PipelineLayout};
+use crate::model::LayerParams;
+use crate::shader::specialize::Structure;
+use crate::variant::{Mode, ShadeSpec, VariantKey};
+use crate::vk::{Buffer, Format, GraphicsDesc, Pipeline, PipelineLayout};
 
+use super::baked::BakedTable;
 use super::scene::Vertex;
 
 /// The entry points compiled per variant (the only ones that see the variant's defines).
 pub const ENTRIES: [&str; 2] = ["forward.vert.glsl", "forward.frag.glsl"];
+
+/// What a per-material pass was built for.
+pub struct PassMaterial {
+    pub layers: Vec<LayerParams>,
+    /// `mode=baked`: the lobe table, on the host and in the buffer the pass reads.
+    pub baked: Option<(BakedTable, Buffer)>,
+}
 
 pub struct ForwardPass {
     pub variant: VariantKey,
     pub pipeline: Pipeline,
     /// Size of the fragment shader's SPIR-V.
     pub spirv_bytes: usize,
+    /// `None` under `mode=generic`.
+    pub material: Option<PassMaterial>,
 }
 
 impl ForwardPass {
@@ -23,6 +37,8 @@ impl ForwardPass {
         layout: &PipelineLayout,
         color_format: Format,
         variant: VariantKey,
+        spec: &ShadeSpec,
+        material: Option<PassMaterial>,
     ) -> Result<Self> {
         if variant.fp16 && !gpu.device.supports_fp16() {
             return Err(Error::Unsupported(format!(
@@ -48,13 +64,50 @@ impl ForwardPass {
             &gpu.device,
             layout,
             &desc,
-            &variant.spec(),
+            spec,
             &format!("forward {variant}"),
         )?;
         Ok(Self {
             variant,
             pipeline,
             spirv_bytes: fragment.len() * 4,
+            material,
         })
+    }
+
+    /// Whether this pass is `variant`'s and shades `layers`.
+    pub fn shades(&self, variant: VariantKey, layers: &[LayerParams]) -> bool {
+        self.variant == variant && self.check_material(layers).is_ok()
+    }
+
+    /// Whether this pass shades `layers` as its variant says: any stack that fits a generic
+    /// pass, the same structure under `specialized`, the same stack under the other modes.
+    pub fn check_material(&self, layers: &[LayerParams]) -> Result<()> {
+        let Some(own) = &self.material else {
+            let max_layers = self.variant.max_layers as usize;
+            if layers.is_empty() || layers.len() > max_layers {
+                return Err(Error::Unsupported(format!(
+                    "the stack has {} layer(s); variant {} holds 1..={max_layers}",
+                    layers.len(),
+                    self.variant
+                )));
+            }
+            return Ok(());
+        };
+        let same = match self.variant.mode {
+            Mode::Specialized => {
+                let model = self.variant.model;
+                Structure::of(model, layers).ok() == Structure::of(model, &own.layers).ok()
+            }
+            _ => own.layers == layers,
+        };
+        if same {
+            Ok(())
+        } else {
+            Err(Error::Unsupported(format!(
+                "this pass ({}) was built for another material; prepare one for this stack",
+                self.variant
+            )))
+        }
     }
 }

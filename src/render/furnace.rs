@@ -55,7 +55,7 @@ pub fn gpu(
         samples: 16,
     };
     let mut renderer = Renderer::new(gpu, &white, desc)?;
-    let pass = renderer.prepare(variant)?;
+    let pass = renderer.prepare(variant, layers)?;
     let frame = renderer.render(&pass, layers, size, size)?;
 
     let camera = renderer.camera;

@@ -92,11 +92,14 @@ impl<'g> ShadingInputs<'g> {
             .ok_or_else(|| Self::unprepared(variant))
     }
 
-    /// The shading set for `variant` and the stack in `material`.
+    /// The shading set for `variant` and the stack in `material`, with a `mode=baked`
+    /// material's lobe table (`baked`; other passes never read binding 5, which then holds
+    /// the material again).
     pub fn bind(
         &self,
         variant: VariantKey,
         material: &Buffer,
+        baked: Option<&Buffer>,
         name: &str,
     ) -> Result<DescriptorSet> {
         let fgd = self.fgd(variant)?;
@@ -106,6 +109,7 @@ impl<'g> ShadingInputs<'g> {
             tir: self.tir(variant).view_for(variant.tir),
             fgd_volume: &fgd.volume_view,
             fgd_plane: &fgd.plane_view,
+            baked: baked.unwrap_or(material),
         };
         Ok(self.layout.bind(&self.gpu.device, &views, name)?)
     }

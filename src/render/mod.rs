@@ -1,5 +1,6 @@
 //! Passes and the frame that runs them: the sky, the shaded sphere, readback.
 
+pub mod baked;
 pub mod eval;
 pub mod forward;
 pub mod furnace;

@@ -13,15 +13,17 @@ use crate::model::LayerParams;
 use crate::shader::interface::{
     material_buffer, FrameConstants, SCENE_BINDINGS, SCENE_SET, SHADING_SET,
 };
+use crate::shader::specialize::{shade_spec, SpecializeError};
 use crate::tables::environment::{EnvDesc, Environment};
-use crate::variant::VariantKey;
+use crate::variant::{Mode, Model, VariantKey};
 use crate::vk::{
     submit_and_wait, Access, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
     DescriptorSetLayout, Format, GpuProfiler, Image, ImageDesc, ImageState, PipelineLayout,
     Resource, Sampler, SamplerDesc, ScopeTiming, Stages,
 };
 
-use super::forward::ForwardPass;
+use super::baked::{self, BakedTable};
+use super::forward::{ForwardPass, PassMaterial};
 use super::inputs::ShadingInputs;
 use super::scene::{uv_sphere, Camera, Mesh};
 use super::sky::SkyPass;
@@ -135,10 +137,56 @@ impl<'g> Renderer<'g> {
         Ok(())
     }
 
-    /// Compiles and builds the pipeline of `variant` (and the tables it samples).
-    pub fn prepare(&mut self, variant: VariantKey) -> Result<ForwardPass> {
+    /// Compiles and builds the pipeline of `variant` (and the tables it samples) for the
+    /// stack `layers` (top first): under `mode=generic` the pass shades any stack that fits;
+    /// under the other modes it is built for this one (its structure, its values, or its baked
+    /// lobes, `render::baked`, at [`baked::DEFAULT_SIZE`] samples).
+    pub fn prepare(&mut self, variant: VariantKey, layers: &[LayerParams]) -> Result<ForwardPass> {
+        self.prepare_baked(variant, layers, baked::DEFAULT_SIZE)
+    }
+
+    /// [`Renderer::prepare`] with a baked table of `baked_size` samples per lobe.
+    pub fn prepare_baked(
+        &mut self,
+        variant: VariantKey,
+        layers: &[LayerParams],
+        baked_size: u32,
+    ) -> Result<ForwardPass> {
         self.inputs.prepare(variant)?;
-        ForwardPass::new(self.gpu, &self.layout, COLOR_FORMAT, variant)
+        let specialize = |e: SpecializeError| Error::Unsupported(format!("variant {variant}: {e}"));
+        if variant.model == Model::Ggx && variant.mode.per_material() {
+            return Err(Error::Unsupported(format!(
+                "variant {variant}: model=ggx is the generic baseline; it has no per-material \
+                 mode (use mode=generic)"
+            )));
+        }
+        if !variant.mode.per_material() {
+            let spec = shade_spec(variant, layers, None).map_err(specialize)?;
+            let pass =
+                ForwardPass::new(self.gpu, &self.layout, COLOR_FORMAT, variant, &spec, None)?;
+            return Ok(pass);
+        }
+        let baked = if variant.mode == Mode::Baked {
+            let evaluator = baked::evaluator_for(self.gpu, variant, layers.len())?;
+            let table = BakedTable::build(&evaluator, layers, baked_size)?;
+            let buffer = table.upload(self.gpu, "baked lobes")?;
+            Some((table, buffer))
+        } else {
+            None
+        };
+        let spec = shade_spec(variant, layers, baked.as_ref().map(|(t, _)| t.shape))
+            .map_err(specialize)?;
+        ForwardPass::new(
+            self.gpu,
+            &self.layout,
+            COLOR_FORMAT,
+            variant,
+            &spec,
+            Some(PassMaterial {
+                layers: layers.to_vec(),
+                baked,
+            }),
+        )
     }
 
     /// Renders one frame of the stack `layers` (top first) with a prepared pass.
@@ -164,14 +212,7 @@ impl<'g> Renderer<'g> {
         height: u32,
         observe: &mut dyn FnMut(ShadedPhase),
     ) -> Result<RenderedFrame> {
-        let max_layers = pass.variant.max_layers as usize;
-        if layers.is_empty() || layers.len() > max_layers {
-            return Err(Error::Unsupported(format!(
-                "the stack has {} layer(s); variant {} holds 1..={max_layers}",
-                layers.len(),
-                pass.variant
-            )));
-        }
+        pass.check_material(layers)?;
         let device = &self.gpu.device;
         let view_proj = self.camera.view_proj(width as f32 / height as f32);
         let constants = FrameConstants {
@@ -187,7 +228,14 @@ impl<'g> Renderer<'g> {
             "frame constants",
         )?;
         let material = material_buffer(device, layers, "material")?;
-        let shading = self.inputs.bind(pass.variant, &material, "shading")?;
+        let baked = pass
+            .material
+            .as_ref()
+            .and_then(|m| m.baked.as_ref())
+            .map(|(_, buffer)| buffer);
+        let shading = self
+            .inputs
+            .bind(pass.variant, &material, baked, "shading")?;
         let mut scene = DescriptorSet::new(device, &self.scene_layout, "scene")?;
         scene
             .write(0, Resource::Buffer(&uniforms))

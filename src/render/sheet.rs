@@ -123,9 +123,11 @@ pub fn render(
 ) -> Result<(usize, usize, Vec<u8>)> {
     check_exposure(exposure_ev)?;
     let mut renderer = Renderer::new(gpu, equirect, EnvDesc::default())?;
-    let passes = columns
+    // A generic column's pass shades every row; a per-material one is built per tile.
+    let first = rows.first().map(|r| r.layers.as_slice()).unwrap_or(&[]);
+    let mut passes = columns
         .iter()
-        .map(|c| renderer.prepare(c.variant))
+        .map(|c| renderer.prepare(c.variant, first))
         .collect::<Result<Vec<_>>>()?;
     let t = tile as usize;
     let width = columns.len() * (t + GAP) + GAP;
@@ -133,7 +135,10 @@ pub fn render(
     let mut sheet: Vec<u8> = [40, 40, 40, 255].repeat(width * height);
     let font = TextFont::bundled();
     for (r, row) in rows.iter().enumerate() {
-        for (c, pass) in passes.iter().enumerate() {
+        for (c, pass) in passes.iter_mut().enumerate() {
+            if pass.check_material(&row.layers).is_err() && pass.material.is_some() {
+                *pass = renderer.prepare(columns[c].variant, &row.layers)?;
+            }
             let frame = renderer.render(pass, &row.layers, tile, tile)?;
             if frame.pixels.iter().flatten().any(|v| !v.is_finite()) {
                 return Err(Error::Unsupported(format!(

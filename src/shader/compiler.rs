@@ -124,11 +124,47 @@ fn normalise(path: &Path) -> Option<String> {
 }
 
 /// The files the compiler writes from Rust tables, under `glsl/include/generated/`: the codes
-/// of every variant axis value and the model's constants, so GLSL never copies them by hand.
+/// of every variant axis value and the model's constants, and the `specialized-values`
+/// constants of every layer, so GLSL never copies them by hand.
 const GENERATED_CODES: &str = "include/generated/codes.glsl";
+const GENERATED_LAYER_VALUES: &str = "include/generated/layer_values.glsl";
+
+/// The numeric parameters of every layer as specialization constants
+/// (`LAYER<i>_<FIELD>`, ids from `variant::VALUE_ID_BASE`), and `tm_layer_values(i)`, the
+/// layer they make: what `mode=specialized-values` reads instead of the material buffer.
+fn layer_values_glsl() -> String {
+    use crate::variant::{LAYER_VALUES, MAX_LAYERS_LIMIT, VALUES_PER_LAYER, VALUE_ID_BASE};
+    let mut out = String::from(
+        "// Written by src/shader/compiler.rs from src/variant.rs (LAYER_VALUES). Needs\n\
+         // shared/material.glsl's LayerGpu.\n\
+         #ifndef LAMINA_GENERATED_LAYER_VALUES\n#define LAMINA_GENERATED_LAYER_VALUES\n",
+    );
+    for layer in 0..MAX_LAYERS_LIMIT {
+        for (field, name) in LAYER_VALUES.iter().enumerate() {
+            let id = VALUE_ID_BASE + VALUES_PER_LAYER * layer + field as u32;
+            out.push_str(&format!(
+                "layout(constant_id = {id}) const float LAYER{layer}_{name} = 0.0;\n"
+            ));
+        }
+    }
+    out.push_str("LayerGpu tm_layer_values(uint i) {\n    switch (i) {\n");
+    for layer in 0..MAX_LAYERS_LIMIT {
+        let v = |names: [&str; 3]| names.map(|n| format!("LAYER{layer}_{n}")).join(", ");
+        out.push_str(&format!(
+            "    case {layer}u: return LayerGpu(vec4({}, 0.0), vec4({}, 0.0), vec4({}, 0.0), \
+             vec4({}, 0.0), vec4(LAYER{layer}_ALPHA, LAYER{layer}_DEPTH, LAYER{layer}_G, 0.0));\n",
+            v(["IOR_R", "IOR_G", "IOR_B"]),
+            v(["KAPPA_R", "KAPPA_G", "KAPPA_B"]),
+            v(["SIGMA_S_R", "SIGMA_S_G", "SIGMA_S_B"]),
+            v(["SIGMA_A_R", "SIGMA_A_G", "SIGMA_A_B"]),
+        ));
+    }
+    out.push_str("    }\n    return material.layers[i];\n}\n#endif\n");
+    out
+}
 
 fn codes_glsl() -> String {
-    use crate::variant::{Axis, Fgd, Model, Ndf, Tir, G2};
+    use crate::variant::{Axis, Fgd, Mode, Model, Ndf, Tir, G2};
     fn axis<A: Axis>(out: &mut String) {
         for &(spelling, value) in A::VALUES {
             let name = format!("{}_{}", A::NAME, spelling)
@@ -147,6 +183,7 @@ fn codes_glsl() -> String {
     axis::<Fgd>(&mut out);
     axis::<G2>(&mut out);
     axis::<Ndf>(&mut out);
+    axis::<Mode>(&mut out);
     for (name, value) in [
         ("TM_INDEX_MATCHED", crate::model::INDEX_MATCHED),
         ("TM_REFLECTS_NOTHING", crate::model::REFLECTS_NOTHING),
@@ -166,6 +203,9 @@ fn codes_glsl() -> String {
 fn text_of(path: &str) -> Option<std::borrow::Cow<'static, str>> {
     if path == GENERATED_CODES {
         return Some(codes_glsl().into());
+    }
+    if path == GENERATED_LAYER_VALUES {
+        return Some(layer_values_glsl().into());
     }
     source(path).map(std::borrow::Cow::Borrowed)
 }

@@ -108,8 +108,9 @@ pub const FGD_GRID_SIZE: u32 = 64;
 /// that feed loop bounds into the shader and recompiles it at draw time (Mesa's
 /// `lvp_inline_uniforms`), which turned the generic pass into a per-material one behind the
 /// benchmarks' back and took minutes of LLVM time for some variants. Storage-buffer loads are
-/// never inlined.
-pub const SHADING_BINDINGS: [Binding; 5] = [
+/// never inlined. Binding 5 holds a `mode=baked` material's lobe table (`render::baked`; a
+/// placeholder for every other pass).
+pub const SHADING_BINDINGS: [Binding; 6] = [
     Binding {
         binding: 0,
         kind: BindingKind::StorageBuffer,
@@ -135,6 +136,11 @@ pub const SHADING_BINDINGS: [Binding; 5] = [
         kind: BindingKind::SampledImage,
         name: "fgd_belcour",
     },
+    Binding {
+        binding: 5,
+        kind: BindingKind::StorageBuffer,
+        name: "Baked",
+    },
 ];
 
 /// The views and buffer one shading set binds.
@@ -144,6 +150,8 @@ pub struct InputViews<'a> {
     pub tir: &'a ImageView,
     pub fgd_volume: &'a ImageView,
     pub fgd_plane: &'a ImageView,
+    /// `mode=baked`: the lobe table (`render::baked::BakedLobes`); any storage buffer otherwise.
+    pub baked: &'a Buffer,
 }
 
 /// The shading set's layout (what a pipeline that shades lists as set 0) and the sampler its
@@ -175,7 +183,8 @@ impl ShadingLayout {
             .write(1, sampled(views.split_sum))
             .write(2, sampled(views.tir))
             .write(3, sampled(views.fgd_volume))
-            .write(4, sampled(views.fgd_plane));
+            .write(4, sampled(views.fgd_plane))
+            .write(5, Resource::Buffer(views.baked));
         Ok(set)
     }
 }

@@ -4,5 +4,6 @@
 mod compiler;
 pub mod interface;
 pub mod kernel;
+pub mod specialize;
 
 pub use compiler::{entry_hash, entry_points, source, ShaderCompiler, ShaderError, HOST_DEFINES};

@@ -122,9 +122,17 @@ fn step(
         };
         renderer.set_mesh(&mesh)?;
     }
-    let compiled = pass.as_ref().map(|p| p.variant) != Some(request.variant);
+    // A per-material pass is rebuilt when the edit changes what it was built for: the
+    // structure under `specialized`, any value under `specialized-values` and `baked`.
+    let compiled = match pass.as_ref() {
+        Some(p) => {
+            p.variant != request.variant
+                || (p.material.is_some() && p.check_material(&request.layers).is_err())
+        }
+        None => true,
+    };
     if compiled {
-        let outcome = renderer.prepare(request.variant);
+        let outcome = renderer.prepare(request.variant, &request.layers);
         let error = outcome.as_ref().err().map(|e| e.to_string());
         let _ = replies.send(Reply::Compiled {
             variant: request.variant,
@@ -136,7 +144,7 @@ fn step(
         }
     }
     let pass = pass.as_ref().expect("prepared above");
-    if request.layers.len() > pass.variant.max_layers as usize {
+    if pass.check_material(&request.layers).is_err() {
         return Ok(None);
     }
     renderer.camera = request.camera;

@@ -25,65 +25,135 @@ struct Tm2Factors {
     float alpha;      // interface roughness
 };
 
+// The factors of layer i for the mean direction arriving at cosine `cos_i` from a medium of
+// IOR `eta_above`; both move below the layer (§4.1).
+Tm2Factors tm2_factor(uint i, inout float eta_above, inout float cos_i) {
+    LayerGpu layer = tm_layer(i);
+    Tm2Factors c;
+    c.alpha = layer.params.x;
+    c.mu = cos_i;
+    c.gr = hg_g_of_alpha(c.alpha);
+    c.grp = c.gr;
+    c.conductor = tm_conductor_at(i, layer);
+    c.skip = false;
+    c.eta = 1.0;
+    c.mu_t = cos_i;
+    if (c.conductor) {
+        vec3 eta = layer.ior.rgb / eta_above;
+        vec3 kappa = layer.kappa.rgb / eta_above;
+        c.r = real3(tm_albedo_rgb(i, cos_i, c.alpha, eta, kappa));
+        c.t = real3(0.0);
+        c.rp = real3(0.0);
+        c.tp = real3(0.0);
+        c.gt = 0.0;
+        c.gtp = 0.0;
+        return c;
+    }
+    float eta_layer = tm_mean(layer.ior.rgb);
+    c.eta = eta_layer / eta_above;
+    if (tm_matched_at(i, c.eta)) {
+        c.skip = true;
+        c.r = real3(0.0);
+        c.rp = real3(0.0);
+        c.t = real3(1.0);
+        c.tp = real3(1.0);
+        c.gt = 1.0;
+        c.gtp = 1.0;
+        return c;
+    }
+    float cos_t = tm_refracted_cos(cos_i, c.eta);
+    c.mu_t = cos_t;
+    // Rough transmission widens less than reflection (§3.4).
+    float s_down = abs(1.0 - cos_i / (c.eta * max(cos_t, 1e-7)));
+    float s_up = abs(1.0 - c.eta * cos_t / max(cos_i, 1e-7));
+    c.gt = hg_g_of_alpha(0.5 * s_down * c.alpha);
+    c.gtp = hg_g_of_alpha(0.5 * s_up * c.alpha);
+    float r = tm_clear_at(i, c.eta) ? 0.0 : tm_albedo_dielectric(i, cos_i, c.alpha, c.eta);
+    c.r = real3(r);
+    c.rp = real3(r);
+    c.t = real3(1.0 - r);
+    c.tp = real3(1.0 - r);
+    cos_i = cos_t;
+    eta_above = eta_layer;
+    return c;
+}
+
 // Pass 1: the factors of every layer for view cosine `mu`, following the mean direction down
-// the stack by Snell's law (§4.1).
+// the stack by Snell's law (§4.1). A generic pipeline stops at the conductor; a specialized one
+// knows it is the last layer, and unrolls.
 void tm2_factors(float mu, inout Tm2Factors comps[MAX_LAYERS], out uint count) {
-    count = min(material.info.x, MAX_LAYERS);
     float eta_above = IOR_AIR;
     float cos_i = mu;
+    if (SPECIALIZED) {
+        count = LAYER_COUNT;
+        [[unroll]] for (uint i = 0u; i < LAYER_COUNT; ++i) {
+            comps[i] = tm2_factor(i, eta_above, cos_i);
+        }
+        return;
+    }
+    count = tm_layer_count();
     for (uint i = 0u; i < count; ++i) {
-        LayerGpu layer = material.layers[i];
-        Tm2Factors c;
-        c.alpha = layer.params.x;
-        c.mu = cos_i;
-        c.gr = hg_g_of_alpha(c.alpha);
-        c.grp = c.gr;
-        c.conductor = tm_is_conductor(layer);
-        c.skip = false;
-        c.eta = 1.0;
-        c.mu_t = cos_i;
-        if (c.conductor) {
-            vec3 eta = layer.ior.rgb / eta_above;
-            vec3 kappa = layer.kappa.rgb / eta_above;
-            c.r = real3(fgd_rgb(cos_i, c.alpha, eta, kappa));
-            c.t = real3(0.0);
-            c.rp = real3(0.0);
-            c.tp = real3(0.0);
-            c.gt = 0.0;
-            c.gtp = 0.0;
-            comps[i] = c;
+        comps[i] = tm2_factor(i, eta_above, cos_i);
+        if (comps[i].conductor) {
             count = i + 1u;
             return;
         }
-        float eta_layer = tm_mean(layer.ior.rgb);
-        c.eta = eta_layer / eta_above;
-        if (abs(c.eta - 1.0) < TM_INDEX_MATCHED) {
-            c.skip = true;
-            c.r = real3(0.0);
-            c.rp = real3(0.0);
-            c.t = real3(1.0);
-            c.tp = real3(1.0);
-            c.gt = 1.0;
-            c.gtp = 1.0;
-            comps[i] = c;
-            continue;
-        }
-        float cos_t = tm_refracted_cos(cos_i, c.eta);
-        c.mu_t = cos_t;
-        // Rough transmission widens less than reflection (§3.4).
-        float s_down = abs(1.0 - cos_i / (c.eta * max(cos_t, 1e-7)));
-        float s_up = abs(1.0 - c.eta * cos_t / max(cos_i, 1e-7));
-        c.gt = hg_g_of_alpha(0.5 * s_down * c.alpha);
-        c.gtp = hg_g_of_alpha(0.5 * s_up * c.alpha);
-        float r = abs(c.eta - 1.0) < TM_REFLECTS_NOTHING ? 0.0 : fgd_dielectric(cos_i, c.alpha, c.eta);
-        c.r = real3(r);
-        c.rp = real3(r);
-        c.t = real3(1.0 - r);
-        c.tp = real3(1.0 - r);
-        comps[i] = c;
-        cos_i = cos_t;
-        eta_above = eta_layer;
     }
+}
+
+// The composition so far (pass 2): the energy and g-weighted stacks, the totals of the lobes
+// above, and the g of the primary path transmitted down to the current component.
+struct Tm2State {
+    TmSlab e;
+    TmSlab1 g;
+    real3 r_prev;
+    real g_prev;
+    float g_t0i;
+};
+
+// Adds component c (layer i; `g_next`: the g of the next layer's reflection) below the stack
+// by the adding equations and emits its lobe (§4.2–4.6); `transmittance` gets the stack's.
+void tm2_add(uint i, Tm2Factors c, float g_next, inout Tm2State s, inout vec3 transmittance) {
+    real3 r_total;
+    real g_total;
+    float g_t0j = s.g_t0i;
+    if (c.conductor) {
+        r_total = tm_over_base(s.e, c.r);
+        g_total = tm_bound(tm_over_base1(s.g, tm_avg(c.r) * real(c.gr)), tm_avg(r_total));
+    } else if (c.skip) {
+        r_total = s.r_prev;
+        g_total = s.g_prev;
+    } else {
+        // First-order transmitted-asymmetry correction (§4.4).
+        g_t0j = hg_refract(s.g_t0i, 1.0 / c.eta) * c.gt;
+        float g_t0j_r = g_t0j * g_next;
+        float g_t0j_rt = hg_refract(g_t0j_r, c.eta) * c.gtp;
+        c.gt = hg_safe_ratio(g_t0j, s.g_t0i);
+        c.gtp = hg_safe_ratio(g_t0j_rt, g_t0j_r);
+        // Total internal reflection moves energy from transmission to reflection (§4.5).
+        if (!tm_denser_at(i, c.eta)) {
+            real3 tau = real(tir_fraction(c.mu, hg_alpha_of_g(s.g_t0i), c.eta)) * c.t;
+            c.r += tau;
+            c.t -= tau;
+        } else {
+            real3 tau = real(tir_fraction(c.mu_t, hg_alpha_of_g(g_t0j_r), 1.0 / c.eta)) * c.tp;
+            c.rp += tau;
+            c.tp -= tau;
+        }
+        s.e = tm_over(s.e, c.r, c.t, c.rp, c.tp);
+        s.g = tm_bounded1(tm_over1(s.g, c.r.x * real(c.gr), c.t.x * real(c.gt),
+                                   c.rp.x * real(c.grp), c.tp.x * real(c.gtp)), s.e);
+        r_total = s.e.r;
+        g_total = s.g.r;
+    }
+    transmittance = c.conductor ? vec3(0.0) : vec3(s.e.t);
+    real3 weight = r_total - s.r_prev;
+    real energy = tm_avg(weight);
+    float lobe_g = energy > real(0.0) ? min(float((g_total - s.g_prev) / energy), 1.0) : 0.0;
+    tm_emit_lobe(vec3(weight), hg_alpha_of_g(lobe_g), LOBE_MIRROR);
+    s.r_prev = r_total;
+    s.g_prev = g_total;
+    s.g_t0i = g_t0j;
 }
 
 // Pass 2: compose the components top to bottom by the adding equations and emit one lobe per
@@ -94,58 +164,20 @@ uint tm2_evaluate(float mu, out vec3 reflectance, out vec3 transmittance) {
     uint count;
     tm2_factors(mu, comps, count);
 
-    TmSlab e = tm_slab_empty();
-    TmSlab1 g = tm_slab1_empty();
-    real3 r_prev = real3(0.0);
-    real g_prev = real(0.0);
-    float g_t0i = 1.0;
-    reflectance = vec3(0.0);
+    Tm2State s = Tm2State(tm_slab_empty(), tm_slab1_empty(), real3(0.0), real(0.0), 1.0);
     transmittance = vec3(1.0);
-    for (uint i = 0u; i < count; ++i) {
-        Tm2Factors c = comps[i];
-        real3 r_total;
-        real g_total;
-        float g_t0j = g_t0i;
-        if (c.conductor) {
-            r_total = tm_over_base(e, c.r);
-            g_total = tm_bound(tm_over_base1(g, tm_avg(c.r) * real(c.gr)), tm_avg(r_total));
-        } else if (c.skip) {
-            r_total = r_prev;
-            g_total = g_prev;
-        } else {
-            // First-order transmitted-asymmetry correction (§4.4).
-            float g_next = i + 1u < count ? comps[i + 1u].gr : 0.0;
-            g_t0j = hg_refract(g_t0i, 1.0 / c.eta) * c.gt;
-            float g_t0j_r = g_t0j * g_next;
-            float g_t0j_rt = hg_refract(g_t0j_r, c.eta) * c.gtp;
-            c.gt = hg_safe_ratio(g_t0j, g_t0i);
-            c.gtp = hg_safe_ratio(g_t0j_rt, g_t0j_r);
-            // Total internal reflection moves energy from transmission to reflection (§4.5).
-            if (c.eta < 1.0) {
-                real3 tau = real(tir_fraction(c.mu, hg_alpha_of_g(g_t0i), c.eta)) * c.t;
-                c.r += tau;
-                c.t -= tau;
-            } else {
-                real3 tau = real(tir_fraction(c.mu_t, hg_alpha_of_g(g_t0j_r), 1.0 / c.eta)) * c.tp;
-                c.rp += tau;
-                c.tp -= tau;
-            }
-            e = tm_over(e, c.r, c.t, c.rp, c.tp);
-            g = tm_bounded1(tm_over1(g, c.r.x * real(c.gr), c.t.x * real(c.gt),
-                                     c.rp.x * real(c.grp), c.tp.x * real(c.gtp)), e);
-            r_total = e.r;
-            g_total = g.r;
+    if (SPECIALIZED) {
+        [[unroll]] for (uint i = 0u; i < LAYER_COUNT; ++i) {
+            float g_next = i + 1u < LAYER_COUNT ? comps[i + 1u].gr : 0.0;
+            tm2_add(i, comps[i], g_next, s, transmittance);
         }
-        transmittance = c.conductor ? vec3(0.0) : vec3(e.t);
-        real3 weight = r_total - r_prev;
-        real energy = tm_avg(weight);
-        float lobe_g = energy > real(0.0) ? min(float((g_total - g_prev) / energy), 1.0) : 0.0;
-        tm_emit_lobe(vec3(weight), hg_alpha_of_g(lobe_g), LOBE_MIRROR);
-        r_prev = r_total;
-        g_prev = g_total;
-        g_t0i = g_t0j;
+    } else {
+        for (uint i = 0u; i < count; ++i) {
+            float g_next = i + 1u < count ? comps[i + 1u].gr : 0.0;
+            tm2_add(i, comps[i], g_next, s, transmittance);
+        }
     }
-    reflectance = vec3(r_prev);
+    reflectance = vec3(s.r_prev);
     return count;
 }
 

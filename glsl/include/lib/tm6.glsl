@@ -289,161 +289,197 @@ void tm6_medium_factors(LayerGpu layer, float mu, out vec3 transmission, out vec
     g_tff = (hg_safe_ratio(tg.r, t_ff.r) + hg_safe_ratio(tg.g, t_ff.g) + hg_safe_ratio(tg.b, t_ff.b)) / 3.0;
 }
 
-// Walks the stack top to bottom for view cosine `mu`: step 2i is layer i's interface (nothing
-// when index-matched, or the substrate, which ends the walk), step 2i + 1 its medium (nothing
-// when its depth is 0). Each step adds its factors below the energy slab `e` and the asymmetry
-// slab `g`, which hold the three reflectances as they grow, and emits the lobes the request
-// flags allow (§5.5–5.7) through tm_emit_lobe. Returns the lobe count.
-uint tm6_evaluate(float mu, out vec3 reflectance, out vec3 transmittance) {
-    uint layers = min(material.info.x, MAX_LAYERS);
-    Tm6Slab e = tm6_slab_empty();
-    Tm6Slab g = tm6_slab_empty();
-    vec3 prev[3] = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));
-    vec3 prev_g[3] = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));
-    // g of the primary and secondary paths transmitted down to the current component.
-    float g_t0i = 1.0;
-    float g_st0i = 1.0;
-    bool primary = false;
-    bool backward = false;
-    uint lobe_count = 0u;
-    float eta_above = IOR_AIR;
-    float cos_i = mu;
-    // The current layer's medium, found at its interface (whose secondary path needs its g).
-    bool medium = false;
-    vec3 m_transmission = vec3(1.0);
-    vec3 m_r_fb = vec3(0.0);
-    vec3 m_t_ff = vec3(1.0);
-    float m_g_rfb = 0.0;
-    float m_g_tff = 1.0;
-    transmittance = vec3(1.0);
-    for (uint step = 0u; step < 2u * layers; ++step) {
-        uint i = step >> 1u;
-        LayerGpu layer = material.layers[i];
-        bool substrate = false;
-        vec3 up[3] = e.up;
-        vec3 up_g[3] = g.up;
-        if ((step & 1u) == 0u && tm_is_conductor(layer)) {
-            substrate = true;
-            vec3 r_c = fgd_rgb(cos_i, layer.params.x, layer.ior.rgb / eta_above,
-                               layer.kappa.rgb / eta_above);
-            tm6_over_base(e, vec3(r_c), up);
-            tm6_over_base(g, vec3(r_c * hg_g_of_alpha(layer.params.x)), up_g);
-            for (int k = 0; k < 3; ++k) {
-                up_g[k] = tm6_bound3(up_g[k], up[k]);
-            }
-            // A bare substrate emits its primary lobe too (the reference sets the flag only
-            // after a dielectric, which would leave a single conductor without any lobe).
-            primary = true;
-        } else if ((step & 1u) == 0u) {
-            float alpha = layer.params.x;
-            float eta_layer = tm_mean(layer.ior.rgb);
-            float eta = eta_layer / eta_above;
-            float cos_below = cos_i;
-            bool refracts = abs(eta - 1.0) >= TM_INDEX_MATCHED;
-            if (refracts) {
-                cos_below = tm_refracted_cos(cos_i, eta);
-            }
-            medium = layer.params.y > 0.0;
-            if (medium) {
-                tm6_medium_factors(layer, cos_below, m_transmission, m_r_fb, m_t_ff, m_g_rfb,
-                                   m_g_tff);
-            }
-            if (refracts) {
-                float g_r = hg_g_of_alpha(alpha);
-                // Rough transmission widens less than reflection (§3.4).
-                float s_down = abs(1.0 - cos_i / (eta * max(cos_below, 1e-7)));
-                float s_up = abs(1.0 - eta * cos_below / max(cos_i, 1e-7));
-                float g_t = hg_g_of_alpha(0.5 * s_down * alpha);
-                float g_tp = hg_g_of_alpha(0.5 * s_up * alpha);
-                // g of the next layer's reflection, and of this layer's medium crossed forward.
-                float g_next = i + 1u < layers ? hg_g_of_alpha(material.layers[i + 1u].params.x) : 0.0;
-                float g_medium = medium ? m_g_tff : 1.0;
-                // Primary path (§4.4).
-                float g_t0j = hg_refract(g_t0i, 1.0 / eta) * g_t;
-                float g_t0j_r = g_t0j * g_next;
-                float g_t0j_rt = hg_refract(g_t0j_r, eta) * g_tp;
-                float gt = hg_safe_ratio(g_t0j, g_t0i);
-                float gtp = hg_safe_ratio(g_t0j_rt, g_t0j_r);
-                // Secondary path: the medium's forward transmission down and up (§5.5).
-                float g_st0j = hg_refract(g_st0i, 1.0 / eta) * g_t;
-                float g_st0j_r = g_st0j * g_medium * g_next * g_medium;
-                float g_st0j_rt = hg_refract(g_st0j_r, eta) * g_tp;
-                float gst = hg_safe_ratio(g_st0j, g_st0i);
-                float gstp = hg_safe_ratio(g_st0j_rt, g_st0j_r);
-                float r0 = abs(eta - 1.0) < TM_REFLECTS_NOTHING ? 0.0 : fgd_dielectric(cos_i, alpha, eta);
-                vec3 r = vec3(r0), t = vec3(1.0 - r0), rp = vec3(r0), tp = vec3(1.0 - r0);
-                vec3 rs = r, ts = t, rsp = rp, tsp = tp;
-                // Total internal reflection moves energy from transmission to reflection (§4.5).
-                if (eta < 1.0) {
-                    vec3 tau = tir_fraction(cos_i, hg_alpha_of_g(g_t0i), eta) * t;
-                    r += tau; t -= tau;
-                    vec3 tau_s = tir_fraction(cos_i, hg_alpha_of_g(g_st0i), eta) * ts;
-                    rs += tau_s; ts -= tau_s;
-                } else {
-                    vec3 tau = tir_fraction(cos_below, hg_alpha_of_g(g_t0j_r), 1.0 / eta) * tp;
-                    rp += tau; tp -= tau;
-                    vec3 tau_s = tir_fraction(cos_below, hg_alpha_of_g(g_st0j_r), 1.0 / eta) * tsp;
-                    rsp += tau_s; tsp -= tau_s;
-                }
-                // Energies: lossless, 1 − r = t. Asymmetries: 1 − r as it is.
-                vec3 et[2] = vec3[2](vec3(t), vec3(ts));
-                vec3 etp[2] = vec3[2](vec3(tp), vec3(tsp));
-                tm6_over_interface(e, vec3[2](vec3(r), vec3(rs)), et,
-                                   vec3[2](vec3(rp), vec3(rsp)), etp, et, etp);
-                vec3 gr[2] = vec3[2](vec3(r * g_r), vec3(rs * g_r));
-                vec3 grp[2] = vec3[2](vec3(rp * g_r), vec3(rsp * g_r));
-                tm6_over_interface(g, gr, vec3[2](vec3(t * gt), vec3(ts * gst)), grp,
-                                   vec3[2](vec3(tp * gtp), vec3(tsp * gstp)),
-                                   vec3[2](vec3(1.0) - gr[0], vec3(1.0) - gr[1]),
-                                   vec3[2](vec3(1.0) - grp[0], vec3(1.0) - grp[1]));
-                tm6_bound(g, e);
-                up = e.up;
-                up_g = g.up;
-                primary = true;
-                g_t0i = g_t0j;
-                g_st0i = g_st0j;
-                cos_i = cos_below;
-                eta_above = eta_layer;
-            }
-        } else if (medium) {
-            vec3 mt = vec3(m_transmission);
-            vec3 mr = vec3(m_r_fb);
-            vec3 mtf = vec3(m_t_ff);
-            tm6_over_medium(e, mt, mtf - mt, mr, mtf);
-            // The g-weighted medium, each entry bounded by its energy (adding.rs's
-            // Component6::medium_weighted).
-            vec3 gt = tm6_bound3(vec3(m_t_ff * m_g_tff), mtf);
-            tm6_over_medium(g, mt, tm6_bound3(gt - mt, mtf - mt), tm6_bound3(vec3(m_r_fb * m_g_rfb), mr),
-                            gt);
-            tm6_bound(g, e);
-            up = e.up;
-            up_g = g.up;
-            backward = true;
-        }
-        transmittance = substrate ? vec3(0.0) : vec3(e.down[0] + e.down[1] + e.down[2]);
-        // Emit primary, secondary-forward, secondary-backward lobes (§5.7).
-        bool emit[3] = bool[3](primary, primary && backward, backward);
+// The walk so far (tm6_step): the energy slab `e` and the asymmetry slab `g`, which hold the
+// three reflectances as they grow, the lobe totals above, the g of the primary and secondary
+// paths transmitted down to the current component, which lobes the components so far allow,
+// the mean direction, and the current layer's medium (found at its interface, whose secondary
+// path needs its g).
+struct Tm6Walk {
+    Tm6Slab e;
+    Tm6Slab g;
+    vec3 prev[3];
+    vec3 prev_g[3];
+    float g_t0i;
+    float g_st0i;
+    bool primary;
+    bool backward;
+    uint lobe_count;
+    float eta_above;
+    float cos_i;
+    bool medium;
+    vec3 m_transmission;
+    vec3 m_r_fb;
+    vec3 m_t_ff;
+    float m_g_rfb;
+    float m_g_tff;
+};
+
+// Step `step` of the walk down a stack of `layers` layers: step 2i is layer i's interface
+// (nothing when index-matched, or the substrate, which ends the walk: returns true), step
+// 2i + 1 its medium (nothing when its depth is 0). Each step adds its factors below the slabs
+// and emits the lobes the flags allow (§5.5–5.7) through tm_emit_lobe.
+bool tm6_step(uint step, uint layers, inout Tm6Walk w, inout vec3 transmittance) {
+    uint i = step >> 1u;
+    LayerGpu layer = tm_layer(i);
+    bool substrate = false;
+    vec3 up[3] = w.e.up;
+    vec3 up_g[3] = w.g.up;
+    if ((step & 1u) == 0u && tm_conductor_at(i, layer)) {
+        substrate = true;
+        vec3 r_c = tm_albedo_rgb(i, w.cos_i, layer.params.x, layer.ior.rgb / w.eta_above,
+                                 layer.kappa.rgb / w.eta_above);
+        tm6_over_base(w.e, vec3(r_c), up);
+        tm6_over_base(w.g, vec3(r_c * hg_g_of_alpha(layer.params.x)), up_g);
         for (int k = 0; k < 3; ++k) {
-            vec3 now = vec3(up[k]);
-            vec3 now_g = vec3(up_g[k]);
-            if (emit[k]) {
-                vec3 dg = now_g - prev_g[k];
-                vec3 dr = now - prev[k];
-                float lobe_g = min((hg_safe_ratio(dg.r, dr.r) + hg_safe_ratio(dg.g, dr.g)
-                                    + hg_safe_ratio(dg.b, dr.b)) / 3.0, 1.0);
-                tm_emit_lobe(max(dr, vec3(0.0)), hg_alpha_of_g(lobe_g),
-                             k == 2 ? LOBE_RETRO : LOBE_MIRROR);
-                lobe_count++;
-            }
-            prev[k] = now;
-            prev_g[k] = now_g;
+            up_g[k] = tm6_bound3(up_g[k], up[k]);
         }
-        if (substrate) {
-            break;
+        // A bare substrate emits its primary lobe too (the reference sets the flag only
+        // after a dielectric, which would leave a single conductor without any lobe).
+        w.primary = true;
+    } else if ((step & 1u) == 0u) {
+        float alpha = layer.params.x;
+        float eta_layer = tm_mean(layer.ior.rgb);
+        float eta = eta_layer / w.eta_above;
+        float cos_below = w.cos_i;
+        bool refracts = !tm_matched_at(i, eta);
+        if (refracts) {
+            cos_below = tm_refracted_cos(w.cos_i, eta);
+        }
+        w.medium = tm_medium_at(i, layer);
+        if (w.medium) {
+            tm6_medium_factors(layer, cos_below, w.m_transmission, w.m_r_fb, w.m_t_ff,
+                               w.m_g_rfb, w.m_g_tff);
+        }
+        if (refracts) {
+            float g_r = hg_g_of_alpha(alpha);
+            // Rough transmission widens less than reflection (§3.4).
+            float s_down = abs(1.0 - w.cos_i / (eta * max(cos_below, 1e-7)));
+            float s_up = abs(1.0 - eta * cos_below / max(w.cos_i, 1e-7));
+            float g_t = hg_g_of_alpha(0.5 * s_down * alpha);
+            float g_tp = hg_g_of_alpha(0.5 * s_up * alpha);
+            // g of the next layer's reflection, and of this layer's medium crossed forward.
+            float g_next = i + 1u < layers ? hg_g_of_alpha(tm_layer(i + 1u).params.x) : 0.0;
+            float g_medium = w.medium ? w.m_g_tff : 1.0;
+            // Primary path (§4.4).
+            float g_t0j = hg_refract(w.g_t0i, 1.0 / eta) * g_t;
+            float g_t0j_r = g_t0j * g_next;
+            float g_t0j_rt = hg_refract(g_t0j_r, eta) * g_tp;
+            float gt = hg_safe_ratio(g_t0j, w.g_t0i);
+            float gtp = hg_safe_ratio(g_t0j_rt, g_t0j_r);
+            // Secondary path: the medium's forward transmission down and up (§5.5).
+            float g_st0j = hg_refract(w.g_st0i, 1.0 / eta) * g_t;
+            float g_st0j_r = g_st0j * g_medium * g_next * g_medium;
+            float g_st0j_rt = hg_refract(g_st0j_r, eta) * g_tp;
+            float gst = hg_safe_ratio(g_st0j, w.g_st0i);
+            float gstp = hg_safe_ratio(g_st0j_rt, g_st0j_r);
+            float r0 = tm_clear_at(i, eta) ? 0.0 : tm_albedo_dielectric(i, w.cos_i, alpha, eta);
+            vec3 r = vec3(r0), t = vec3(1.0 - r0), rp = vec3(r0), tp = vec3(1.0 - r0);
+            vec3 rs = r, ts = t, rsp = rp, tsp = tp;
+            // Total internal reflection moves energy from transmission to reflection (§4.5).
+            if (!tm_denser_at(i, eta)) {
+                vec3 tau = tir_fraction(w.cos_i, hg_alpha_of_g(w.g_t0i), eta) * t;
+                r += tau; t -= tau;
+                vec3 tau_s = tir_fraction(w.cos_i, hg_alpha_of_g(w.g_st0i), eta) * ts;
+                rs += tau_s; ts -= tau_s;
+            } else {
+                vec3 tau = tir_fraction(cos_below, hg_alpha_of_g(g_t0j_r), 1.0 / eta) * tp;
+                rp += tau; tp -= tau;
+                vec3 tau_s = tir_fraction(cos_below, hg_alpha_of_g(g_st0j_r), 1.0 / eta) * tsp;
+                rsp += tau_s; tsp -= tau_s;
+            }
+            // Energies: lossless, 1 − r = t. Asymmetries: 1 − r as it is.
+            vec3 et[2] = vec3[2](vec3(t), vec3(ts));
+            vec3 etp[2] = vec3[2](vec3(tp), vec3(tsp));
+            tm6_over_interface(w.e, vec3[2](vec3(r), vec3(rs)), et,
+                               vec3[2](vec3(rp), vec3(rsp)), etp, et, etp);
+            vec3 gr[2] = vec3[2](vec3(r * g_r), vec3(rs * g_r));
+            vec3 grp[2] = vec3[2](vec3(rp * g_r), vec3(rsp * g_r));
+            tm6_over_interface(w.g, gr, vec3[2](vec3(t * gt), vec3(ts * gst)), grp,
+                               vec3[2](vec3(tp * gtp), vec3(tsp * gstp)),
+                               vec3[2](vec3(1.0) - gr[0], vec3(1.0) - gr[1]),
+                               vec3[2](vec3(1.0) - grp[0], vec3(1.0) - grp[1]));
+            tm6_bound(w.g, w.e);
+            up = w.e.up;
+            up_g = w.g.up;
+            w.primary = true;
+            w.g_t0i = g_t0j;
+            w.g_st0i = g_st0j;
+            w.cos_i = cos_below;
+            w.eta_above = eta_layer;
+        }
+    } else if (w.medium) {
+        vec3 mt = vec3(w.m_transmission);
+        vec3 mr = vec3(w.m_r_fb);
+        vec3 mtf = vec3(w.m_t_ff);
+        tm6_over_medium(w.e, mt, mtf - mt, mr, mtf);
+        // The g-weighted medium, each entry bounded by its energy (adding.rs's
+        // Component6::medium_weighted).
+        vec3 gt = tm6_bound3(vec3(w.m_t_ff * w.m_g_tff), mtf);
+        tm6_over_medium(w.g, mt, tm6_bound3(gt - mt, mtf - mt),
+                        tm6_bound3(vec3(w.m_r_fb * w.m_g_rfb), mr), gt);
+        tm6_bound(w.g, w.e);
+        up = w.e.up;
+        up_g = w.g.up;
+        w.backward = true;
+    }
+    transmittance = substrate ? vec3(0.0) : vec3(w.e.down[0] + w.e.down[1] + w.e.down[2]);
+    // Emit primary, secondary-forward, secondary-backward lobes (§5.7).
+    bool emit[3] = bool[3](w.primary, w.primary && w.backward, w.backward);
+    for (int k = 0; k < 3; ++k) {
+        vec3 now = vec3(up[k]);
+        vec3 now_g = vec3(up_g[k]);
+        if (emit[k]) {
+            vec3 dg = now_g - w.prev_g[k];
+            vec3 dr = now - w.prev[k];
+            float lobe_g = min((hg_safe_ratio(dg.r, dr.r) + hg_safe_ratio(dg.g, dr.g)
+                                + hg_safe_ratio(dg.b, dr.b)) / 3.0, 1.0);
+            tm_emit_lobe(max(dr, vec3(0.0)), hg_alpha_of_g(lobe_g),
+                         k == 2 ? LOBE_RETRO : LOBE_MIRROR);
+            w.lobe_count++;
+        }
+        w.prev[k] = now;
+        w.prev_g[k] = now_g;
+    }
+    return substrate;
+}
+
+// Walks the stack top to bottom for view cosine `mu` (tm6_step). Returns the lobe count. A
+// specialized pipeline knows the substrate is the last layer: its walk has a constant length
+// (one step fewer over a conductor) and unrolls.
+uint tm6_evaluate(float mu, out vec3 reflectance, out vec3 transmittance) {
+    Tm6Walk w;
+    w.e = tm6_slab_empty();
+    w.g = tm6_slab_empty();
+    w.prev = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));
+    w.prev_g = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));
+    w.g_t0i = 1.0;
+    w.g_st0i = 1.0;
+    w.primary = false;
+    w.backward = false;
+    w.lobe_count = 0u;
+    w.eta_above = IOR_AIR;
+    w.cos_i = mu;
+    w.medium = false;
+    w.m_transmission = vec3(1.0);
+    w.m_r_fb = vec3(0.0);
+    w.m_t_ff = vec3(1.0);
+    w.m_g_rfb = 0.0;
+    w.m_g_tff = 1.0;
+    transmittance = vec3(1.0);
+    if (SPECIALIZED) {
+        [[unroll]] for (uint step = 0u; step < 2u * LAYER_COUNT - CONDUCTOR_BASE; ++step) {
+            tm6_step(step, LAYER_COUNT, w, transmittance);
+        }
+    } else {
+        uint layers = tm_layer_count();
+        for (uint step = 0u; step < 2u * layers; ++step) {
+            if (tm6_step(step, layers, w, transmittance)) {
+                break;
+            }
         }
     }
-    reflectance = prev[0] + prev[1] + prev[2];
-    return lobe_count;
+    reflectance = w.prev[0] + w.prev[1] + w.prev[2];
+    return w.lobe_count;
 }
 
 #endif

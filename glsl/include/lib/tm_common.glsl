@@ -11,6 +11,7 @@
 #include "tir.glsl"
 #include "../shared/variant.glsl"
 #include "../bindings/shading.glsl"
+#include "../generated/layer_values.glsl"
 
 // The medium above the stack: vacuum, as src/model/mod.rs's IOR_AIR.
 const float IOR_AIR = 1.0;
@@ -106,6 +107,69 @@ float tm_mean(vec3 v) {
 
 bool tm_is_conductor(LayerGpu layer) {
     return any(greaterThan(layer.kappa.rgb, vec3(0.0)));
+}
+
+// The material as the models read it. Under MODE_GENERIC every fact comes from the material
+// buffer at run time; a per-material pipeline (SPECIALIZED) has the layer count and each
+// layer's structure as constants (shared/variant.glsl), so that with the loops unrolled
+// ([[unroll]] in the models) every branch below folds and the dead paths vanish, and
+// MODE_SPECIALIZED_VALUES has the numbers too. The host decides the structure with the f64
+// model's own tests (src/specialize.rs), so both agree with the CPU oracle.
+uint tm_layer_count() {
+    return SPECIALIZED ? LAYER_COUNT : min(material.info.x, MAX_LAYERS);
+}
+
+LayerGpu tm_layer(uint i) {
+    // Not a ?: — the buffer's LayerGpu and a constant-built one are different SPIR-V types.
+    if (MODE == MODE_SPECIALIZED_VALUES) {
+        return tm_layer_values(i);
+    }
+    return material.layers[i];
+}
+
+bool tm_bit(uint mask, uint i) {
+    return ((mask >> i) & 1u) != 0u;
+}
+
+bool tm_conductor_at(uint i, LayerGpu layer) {
+    return SPECIALIZED ? CONDUCTOR_BASE != 0u && i + 1u == LAYER_COUNT : tm_is_conductor(layer);
+}
+
+// An index-matched interface (relative IOR η): none at all.
+bool tm_matched_at(uint i, float eta) {
+    return SPECIALIZED ? tm_bit(MATCHED_MASK, i) : abs(eta - 1.0) < TM_INDEX_MATCHED;
+}
+
+// An interface that refracts but reflects nothing.
+bool tm_clear_at(uint i, float eta) {
+    return SPECIALIZED ? tm_bit(CLEAR_MASK, i) : abs(eta - 1.0) < TM_REFLECTS_NOTHING;
+}
+
+// Denser below (η ≥ 1): light going down cannot be trapped, light going up can.
+bool tm_denser_at(uint i, float eta) {
+    return SPECIALIZED ? tm_bit(DENSER_MASK, i) : eta >= 1.0;
+}
+
+bool tm_medium_at(uint i, LayerGpu layer) {
+    return SPECIALIZED ? tm_bit(MEDIUM_MASK, i) : layer.params.y > 0.0;
+}
+
+// A smooth interface's directional albedo is its Fresnel reflectance: exact, with no table
+// (src/model/mod.rs's `albedo`).
+bool tm_smooth_at(uint i, float alpha) {
+    return SPECIALIZED ? tm_bit(SMOOTH_MASK, i) : alpha == 0.0;
+}
+
+vec3 tm_albedo_rgb(uint i, float mu, float alpha, vec3 eta, vec3 kappa) {
+    if (tm_smooth_at(i, alpha)) {
+        return vec3(fresnel_conductor(mu, eta.r, kappa.r), fresnel_conductor(mu, eta.g, kappa.g),
+                    fresnel_conductor(mu, eta.b, kappa.b));
+    }
+    return fgd_rgb(mu, alpha, eta, kappa);
+}
+
+float tm_albedo_dielectric(uint i, float mu, float alpha, float eta) {
+    return tm_smooth_at(i, alpha) ? fresnel_dielectric(mu, eta) : fgd_dielectric(mu, alpha, eta);
 }
 
 // |cos| of the mean direction refracted from cosine `cos_i` through relative IOR η; 0 when the

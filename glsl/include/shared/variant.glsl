@@ -1,7 +1,11 @@
 // Specialization constants of the shading passes. Mirrors `ShadeSpec` in
-// src/variant.rs (ids 0…6 and order); the codes follow the value tables there.
+// src/variant.rs (ids 0…17 and order, the values from id 32 in generated/layer_values.glsl);
+// the codes follow the value tables there.
 #ifndef LAMINA_SHARED_VARIANT
 #define LAMINA_SHARED_VARIANT
+
+// [[unroll]] on the loops of a per-material pipeline, whose trip counts are constants.
+#extension GL_EXT_control_flow_attributes : require
 
 layout(constant_id = 0) const uint MODEL = 0;
 layout(constant_id = 1) const uint MAX_LAYERS = 4;
@@ -12,9 +16,27 @@ layout(constant_id = 5) const uint NDF_MODE = 0;
 // The work-group width of the compute entry points that shade (tm_eval, fgd_probe):
 //   layout(local_size_x_id = SHADE_LOCAL_SIZE_X_ID) in;
 #define SHADE_LOCAL_SIZE_X_ID 6
+layout(constant_id = 7) const uint MODE = 0;
+// The structure of the material a per-material pipeline (every MODE but generic) is built
+// for, from src/specialize.rs: the layer count, and per-layer bit masks (bit i: layer i, top
+// first). Zero under MODE_GENERIC, where the shader reads the same facts from the material.
+layout(constant_id = 8) const uint LAYER_COUNT = 0;
+layout(constant_id = 9) const uint SMOOTH_MASK = 0;      // α = 0: Fresnel, no FGD lookup
+layout(constant_id = 10) const uint CONDUCTOR_BASE = 0;  // 1: the last layer is a conductor
+layout(constant_id = 11) const uint MEDIUM_MASK = 0;     // a 6-flux medium (depth > 0)
+layout(constant_id = 12) const uint DENSER_MASK = 0;     // η_ij ≥ 1: TIR only going up
+layout(constant_id = 13) const uint MATCHED_MASK = 0;    // index-matched: no interface
+layout(constant_id = 14) const uint CLEAR_MASK = 0;      // refracts, reflects nothing
+// MODE_BAKED: the lobe count, the lobes lit around the view, the samples per lobe.
+layout(constant_id = 15) const uint LOBE_COUNT = 0;
+layout(constant_id = 16) const uint RETRO_MASK = 0;
+layout(constant_id = 17) const uint BAKED_SIZE = 0;
 
 // The codes of every axis value (MODEL_TM2, TIR_LUT32, FGD_RESAMPLED4D, G2_EARL, …), written
 // from the Rust value tables by src/shader/compiler.rs.
 #include "../generated/codes.glsl"
+
+// Whether the pipeline knows the material's structure.
+const bool SPECIALIZED = MODE != MODE_GENERIC;
 
 #endif

@@ -1,0 +1,178 @@
+//! `mode=baked`: a spatially uniform material's lobes (weight RGB and GGX α per lobe)
+//! tabulated over the view cosine by the GPU evaluator (`tm_eval.comp.glsl`, the model the
+//! generic pass runs), so that the shaded pass reads two samples per lobe and interpolates,
+//! then makes one environment fetch per lobe (`forward.frag.glsl`'s `shade_baked`).
+//!
+//! Sample j of `size` lies at μ = (j/(size − 1))² (μ = 0 evaluated at the pass's smallest
+//! cosine, [`MIN_COS`]): uniform in √μ, so that samples crowd towards grazing, where the model
+//! has its kinks (the FGD tables' first texel, lobes whose α saturates at 1): uniform in μ, the
+//! 64-sample table of `absorbing-film` was 1.2e-2 off there. Lobes that carry no energy at any sample are left out; the rest keep the
+//! model's order. The study (`profiling/sweeps/specialization.toml`, `lamina bake-error`)
+//! measures the interpolation's error against the model per table size.
+
+use crate::error::{Error, Result};
+use crate::gpu::Gpu;
+use crate::model::{Evaluation, LayerParams, Lobe};
+use crate::shader::specialize::{BakedShape, MAX_BAKED_LOBES};
+use crate::variant::{Mode, VariantKey, MAX_LAYERS_LIMIT};
+use crate::vk::{Buffer, BufferUsageFlags};
+
+use super::eval::GpuEvaluator;
+
+/// Samples per lobe of a baked table unless asked otherwise: the smallest size of the error
+/// study (32, 64, 128, 256) whose largest lobe error over the presets is below 1e-3 —
+/// 6.6e-4 (`absorbing-film`; 128 samples: 2.1e-3), `cargo test --test specialized baked --
+/// --nocapture` prints the table. The errors come from the model's kinks near grazing (the
+/// FGD table's first texel, a lobe's α reaching 1), so they fall unevenly with the size.
+pub const DEFAULT_SIZE: u32 = 256;
+
+/// The sizes a baked table may have.
+pub const SIZE_RANGE: std::ops::RangeInclusive<u32> = 2..=4096;
+
+/// The smallest view cosine the forward pass shades (its clamp of n·v).
+pub const MIN_COS: f64 = 1e-4;
+
+/// A material's baked lobes, on the host.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakedTable {
+    pub shape: BakedShape,
+    /// `[lobe][sample]`: (weight RGB, √α). The perceptual roughness √α is what the pass needs
+    /// (the prefiltered cube's mip is linear in it) and what it interpolates.
+    pub texels: Vec<[f32; 4]>,
+    /// The model's index of each kept lobe.
+    pub kept: Vec<usize>,
+}
+
+/// The view cosine of sample `j` of a table of `size`.
+pub fn sample_cos(j: u32, size: u32) -> f64 {
+    let u = f64::from(j) / f64::from(size - 1);
+    (u * u).max(MIN_COS)
+}
+
+impl BakedTable {
+    /// Tabulates `layers` with `evaluator` (a `mode=generic` evaluator of the variant's model,
+    /// FGD, TIR and precision) at `size` view cosines.
+    pub fn build(evaluator: &GpuEvaluator<'_>, layers: &[LayerParams], size: u32) -> Result<Self> {
+        if !SIZE_RANGE.contains(&size) {
+            return Err(Error::Unsupported(format!(
+                "baked table size {size} is outside {}..={}",
+                SIZE_RANGE.start(),
+                SIZE_RANGE.end()
+            )));
+        }
+        let cosines: Vec<f64> = (0..size).map(|j| sample_cos(j, size)).collect();
+        let evaluations = evaluator.evaluate_lobes(layers, &cosines)?;
+        let first = &evaluations[0];
+        let lobe_count = first.evaluation.lobes.len();
+        if evaluations
+            .iter()
+            .any(|e| e.evaluation.lobes.len() != lobe_count || e.retro_mask != first.retro_mask)
+        {
+            return Err(Error::Unsupported(
+                "the model emitted a different lobe set at different view cosines; a baked \
+                 table needs one lobe set"
+                    .into(),
+            ));
+        }
+        let kept: Vec<usize> = (0..lobe_count)
+            .filter(|&k| {
+                evaluations
+                    .iter()
+                    .any(|e| e.evaluation.lobes[k].weight.iter().any(|&w| w > 0.0))
+            })
+            .collect();
+        if kept.len() > MAX_BAKED_LOBES {
+            return Err(Error::Unsupported(format!(
+                "mode=baked holds at most {MAX_BAKED_LOBES} lobes; the stack has {} (use \
+                 mode=specialized)",
+                kept.len()
+            )));
+        }
+        let mut texels = Vec::with_capacity(kept.len() * size as usize);
+        let mut retro_mask = 0;
+        for (slot, &k) in kept.iter().enumerate() {
+            if k < 32 && first.retro_mask & (1 << k) != 0 {
+                retro_mask |= 1 << slot;
+            }
+            for e in &evaluations {
+                let lobe = e.evaluation.lobes[k];
+                let w = lobe.weight.map(|w| w as f32);
+                texels.push([w[0], w[1], w[2], lobe.roughness.sqrt() as f32]);
+            }
+        }
+        Ok(Self {
+            shape: BakedShape {
+                lobe_count: kept.len() as u32,
+                retro_mask,
+                size,
+            },
+            texels,
+            kept,
+        })
+    }
+
+    /// The lobes the shaded pass reads at view cosine `mu` (its interpolation, on the host).
+    pub fn lobes_at(&self, mu: f64) -> Vec<Lobe> {
+        let size = self.shape.size;
+        let x = mu.clamp(0.0, 1.0).sqrt() * f64::from(size - 1);
+        let j = (x as u32).min(size - 2);
+        let f = x - f64::from(j);
+        (0..self.shape.lobe_count)
+            .map(|k| {
+                let at = (k * size + j) as usize;
+                let (a, b) = (self.texels[at], self.texels[at + 1]);
+                let lerp = |c: usize| f64::from(a[c]) + (f64::from(b[c]) - f64::from(a[c])) * f;
+                Lobe {
+                    weight: [lerp(0), lerp(1), lerp(2)],
+                    roughness: lerp(3) * lerp(3),
+                }
+            })
+            .collect()
+    }
+
+    /// The table in a storage buffer, as `forward.frag.glsl` reads it.
+    pub fn upload(&self, gpu: &Gpu, name: &str) -> Result<Buffer> {
+        Ok(Buffer::with_data(
+            &gpu.device,
+            BufferUsageFlags::STORAGE_BUFFER,
+            &self.texels,
+            name,
+        )?)
+    }
+}
+
+/// The largest error of `table`'s lobes against the model's (`exact`, evaluated at `probes`):
+/// per probe, lobe and channel, the weight's error relative to the reflectance there (what the
+/// lobe's error does to the shaded colour), and the roughness's error (√α, the cube's mip axis)
+/// weighted by the lobe's share of that reflectance. Reflectances below 1e-3 count as 1e-3.
+pub fn max_lobe_error(table: &BakedTable, probes: &[f64], exact: &[Evaluation]) -> f64 {
+    let mut worst: f64 = 0.0;
+    for (&mu, e) in probes.iter().zip(exact) {
+        let baked = table.lobes_at(mu);
+        for (b, &k) in baked.iter().zip(&table.kept) {
+            let m = e.lobes[k];
+            for c in 0..3 {
+                let r = e.reflectance[c].max(1e-3);
+                let share = m.weight[c].max(0.0) / r;
+                let roughness = (b.roughness.sqrt() - m.roughness.sqrt()).abs();
+                worst = worst
+                    .max((b.weight[c] - m.weight[c]).abs() / r)
+                    .max(share * roughness);
+            }
+        }
+    }
+    worst
+}
+
+/// The `mode=generic` evaluator whose lobes a `mode=baked` variant tabulates, for a stack of
+/// `layers` layers.
+pub fn evaluator_for(gpu: &Gpu, variant: VariantKey, layers: usize) -> Result<GpuEvaluator<'_>> {
+    GpuEvaluator::new(
+        gpu,
+        VariantKey {
+            mode: Mode::Generic,
+            max_layers: layers.clamp(1, MAX_LAYERS_LIMIT as usize) as u32,
+            ..variant
+        },
+    )
+}

@@ -1,0 +1,248 @@
+//! Per-material pipelines: the specialization constants that tell the shading passes a
+//! material's structure (`mode=specialized`), its values too (`mode=specialized-values`), or
+//! its baked lobes (`mode=baked`), mirrored in `glsl/include/shared/variant.glsl`.
+//!
+//! The structure is decided here, in f64, by the same tests the model makes (`model::tm2`,
+//! `model::tm6`: the conductor ends the stack, `INDEX_MATCHED`, `REFLECTS_NOTHING`, η ≥ 1,
+//! α = 0, depth > 0), so a specialized pipeline takes the branches the CPU oracle takes; the
+//! generic pipeline makes the same tests in f32 at run time (`glsl/include/lib/tm_common.glsl`).
+
+use crate::model::{LayerParams, INDEX_MATCHED, IOR_AIR, REFLECTS_NOTHING};
+use crate::variant::{Mode, Model, ShadeSpec, VariantKey, MAX_LAYERS_LIMIT};
+
+/// Why a material cannot have a per-material pipeline.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SpecializeError {
+    #[error("a per-material pipeline (mode={mode}) needs 1..={MAX_LAYERS_LIMIT} layers; the stack has {count}")]
+    LayerCount { mode: Mode, count: usize },
+    #[error("layer {layer} is a conductor above another layer; a conductor ends the stack")]
+    ConductorAbove { layer: usize },
+    #[error("mode=baked holds at most {max} lobes; the stack has {count} (use mode=specialized)")]
+    TooManyLobes { count: usize, max: usize },
+}
+
+/// A material's structure: what a specialized pipeline knows about it. Masks hold bit `i` for
+/// layer `i`, top first.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Structure {
+    pub layer_count: u32,
+    /// α = 0: the interface reflects its Fresnel reflectance, no FGD lookup.
+    pub smooth_mask: u32,
+    /// The last layer is a conductor.
+    pub conductor_base: bool,
+    /// 6-flux layers with a medium (depth > 0); 0 under the 2-flux model.
+    pub medium_mask: u32,
+    /// Dielectric interfaces with η_ij ≥ 1 (TIR only for light going up).
+    pub denser_mask: u32,
+    /// Index-matched interfaces: the model skips them.
+    pub matched_mask: u32,
+    /// Interfaces that refract but reflect nothing.
+    pub clear_mask: u32,
+}
+
+fn mean(v: [f64; 3]) -> f64 {
+    (v[0] + v[1] + v[2]) / 3.0
+}
+
+impl Structure {
+    /// The structure of `layers` (top first) under `model`.
+    pub fn of(model: Model, layers: &[LayerParams]) -> Result<Self, SpecializeError> {
+        if layers.is_empty() || layers.len() > MAX_LAYERS_LIMIT as usize {
+            return Err(SpecializeError::LayerCount {
+                mode: Mode::Specialized,
+                count: layers.len(),
+            });
+        }
+        let mut s = Self {
+            layer_count: layers.len() as u32,
+            ..Self::default()
+        };
+        let mut eta_above = IOR_AIR;
+        for (i, layer) in layers.iter().enumerate() {
+            let bit = 1u32 << i;
+            if layer.roughness == 0.0 {
+                s.smooth_mask |= bit;
+            }
+            if layer.is_conductor() {
+                if i + 1 != layers.len() {
+                    return Err(SpecializeError::ConductorAbove { layer: i + 1 });
+                }
+                s.conductor_base = true;
+                continue;
+            }
+            if model == Model::Tm6 && layer.depth > 0.0 {
+                s.medium_mask |= bit;
+            }
+            let eta_layer = mean(layer.ior);
+            let eta = eta_layer / eta_above;
+            if (eta - 1.0).abs() < INDEX_MATCHED {
+                s.matched_mask |= bit;
+                continue;
+            }
+            if (eta - 1.0).abs() < REFLECTS_NOTHING {
+                s.clear_mask |= bit;
+            }
+            if eta >= 1.0 {
+                s.denser_mask |= bit;
+            }
+            eta_above = eta_layer;
+        }
+        Ok(s)
+    }
+}
+
+/// The lobes of a baked material (`render::baked`): how many, which are lit around the view,
+/// and the view-cosine samples per lobe.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BakedShape {
+    pub lobe_count: u32,
+    pub retro_mask: u32,
+    pub size: u32,
+}
+
+/// Most lobes a baked table holds (one bit each in `RETRO_MASK`).
+pub const MAX_BAKED_LOBES: usize = 32;
+
+/// The specialization constants of `variant`'s shading passes for `layers`. Under
+/// `mode=generic` the material does not matter (the variant's own constants); `baked` needs
+/// the baked table's shape.
+pub fn shade_spec(
+    variant: VariantKey,
+    layers: &[LayerParams],
+    baked: Option<BakedShape>,
+) -> Result<ShadeSpec, SpecializeError> {
+    let mut spec = variant.spec();
+    if variant.mode == Mode::Generic {
+        return Ok(spec);
+    }
+    let s = Structure::of(variant.model, layers).map_err(|e| match e {
+        SpecializeError::LayerCount { count, .. } => SpecializeError::LayerCount {
+            mode: variant.mode,
+            count,
+        },
+        other => other,
+    })?;
+    // The arrays have the material's own size: `max_layers` does not matter.
+    spec.max_layers = s.layer_count;
+    spec.layer_count = s.layer_count;
+    spec.smooth_mask = s.smooth_mask;
+    spec.conductor_base = u32::from(s.conductor_base);
+    spec.medium_mask = s.medium_mask;
+    spec.denser_mask = s.denser_mask;
+    spec.matched_mask = s.matched_mask;
+    spec.clear_mask = s.clear_mask;
+    if variant.mode == Mode::SpecializedValues {
+        for (dst, l) in spec.values.iter_mut().zip(layers) {
+            let f = |v: f64| v as f32;
+            *dst = [
+                f(l.ior[0]),
+                f(l.ior[1]),
+                f(l.ior[2]),
+                f(l.kappa[0]),
+                f(l.kappa[1]),
+                f(l.kappa[2]),
+                f(l.sigma_s[0]),
+                f(l.sigma_s[1]),
+                f(l.sigma_s[2]),
+                f(l.sigma_a[0]),
+                f(l.sigma_a[1]),
+                f(l.sigma_a[2]),
+                f(l.roughness),
+                f(l.depth),
+                f(l.g),
+                0.0,
+            ];
+        }
+    }
+    if let Some(b) = baked {
+        spec.lobe_count = b.lobe_count;
+        spec.retro_mask = b.retro_mask;
+        spec.baked_size = b.size;
+    }
+    Ok(spec)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn layer(ior: f64, kappa: f64, roughness: f64, depth: f64) -> LayerParams {
+        LayerParams {
+            ior: [ior; 3],
+            kappa: [kappa; 3],
+            roughness,
+            depth,
+            sigma_s: [1.0; 3],
+            sigma_a: [0.1; 3],
+            g: 0.3,
+        }
+    }
+
+    #[test]
+    fn structure_follows_the_models_tests() {
+        let stack = [
+            layer(1.5, 0.0, 0.0, 0.5),
+            layer(1.5, 0.0, 0.1, 0.0),
+            layer(1.2, 0.0, 0.2, 0.3),
+            layer(1.2005, 0.0, 0.2, 0.0),
+            layer(0.2, 3.0, 0.3, 0.0),
+        ];
+        let s = Structure::of(Model::Tm6, &stack).unwrap();
+        assert_eq!(s.layer_count, 5);
+        assert_eq!(s.smooth_mask, 0b00001);
+        assert!(s.conductor_base);
+        assert_eq!(s.medium_mask, 0b00101);
+        assert_eq!(s.matched_mask, 0b00010);
+        assert_eq!(s.clear_mask, 0b01000);
+        // 1.5 over air: denser; 1.2 under 1.5: lighter; 1.2005 under 1.2: denser.
+        assert_eq!(s.denser_mask, 0b01001);
+        let tm2 = Structure::of(Model::Tm2, &stack).unwrap();
+        assert_eq!(tm2.medium_mask, 0, "the 2-flux model has no media");
+    }
+
+    #[test]
+    fn generic_ignores_the_material_and_specialized_ignores_max_layers() {
+        let stack = [layer(1.5, 0.0, 0.1, 0.0), layer(0.2, 3.0, 0.3, 0.0)];
+        let generic: VariantKey = "model=tm2,max_layers=8".parse().unwrap();
+        assert_eq!(
+            shade_spec(generic, &stack, None).unwrap(),
+            generic.spec(),
+            "generic"
+        );
+        let a = shade_spec(
+            "model=tm2,max_layers=4,mode=specialized".parse().unwrap(),
+            &stack,
+            None,
+        )
+        .unwrap();
+        let b = shade_spec(
+            "model=tm2,max_layers=16,mode=specialized".parse().unwrap(),
+            &stack,
+            None,
+        )
+        .unwrap();
+        assert_eq!(a, b);
+        assert_eq!((a.max_layers, a.layer_count, a.conductor_base), (2, 2, 1));
+        assert!(a.values.iter().flatten().all(|&v| v == 0.0));
+        let v = shade_spec(
+            "model=tm2,mode=specialized-values".parse().unwrap(),
+            &stack,
+            None,
+        )
+        .unwrap();
+        assert_eq!(v.values[1][3], 3.0, "κ of the conductor");
+        assert_eq!(v.values[0][12], 0.1, "α of the varnish");
+    }
+
+    #[test]
+    fn errors_name_the_problem() {
+        let e = Structure::of(
+            Model::Tm2,
+            &[layer(0.2, 3.0, 0.3, 0.0), layer(1.5, 0.0, 0.1, 0.0)],
+        )
+        .unwrap_err();
+        assert_eq!(e, SpecializeError::ConductorAbove { layer: 1 });
+        let e = shade_spec("mode=specialized".parse().unwrap(), &[], None).unwrap_err();
+        assert!(e.to_string().contains("mode=specialized"), "{e}");
+    }
+}
