@@ -39,14 +39,17 @@ impl Stack {
     }
 
     /// The variant `key` names over [`Stack::base_variant`] (the base itself for `None`),
-    /// checked to hold the stack ([`Stack::check_fits`]: a key may set `max_layers` lower).
+    /// checked to hold the stack ([`Stack::check_fits`]: a key may set `max_layers` lower;
+    /// a per-material pipeline has the stack's own array size, whatever `max_layers` says).
     pub fn variant(&self, key: Option<&str>) -> Result<VariantKey, MaterialError> {
         let base = self.base_variant();
         let variant = match key {
             Some(k) => VariantKey::parse_over(k, base)?,
             None => base,
         };
-        self.check_fits(variant.max_layers)?;
+        if !variant.mode.per_material() {
+            self.check_fits(variant.max_layers)?;
+        }
         Ok(variant)
     }
 }
@@ -65,5 +68,9 @@ mod tests {
         assert_eq!((v.fp16, v.max_layers, v.model), (true, 8, stack.model));
         let e = stack.variant(Some("max_layers=4")).unwrap_err().to_string();
         assert!(e.contains("5 layers") && e.contains("max_layers=4"), "{e}");
+        let v = stack
+            .variant(Some("max_layers=4,mode=specialized"))
+            .unwrap();
+        assert_eq!(v.max_layers, 4, "kept as given, and irrelevant");
     }
 }

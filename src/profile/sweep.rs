@@ -46,8 +46,9 @@ use super::counter::CounterSetup;
 
 /// Resolution of the counted draw when instructions are counted without a `counter_size`.
 pub const DEFAULT_COUNTER_SIZE: (u32, u32) = (48, 48);
-/// The pseudo-axes a sweep adds to the variant axes.
-pub const EXTRA_AXES: [&str; 2] = ["active_layers", "material"];
+/// The pseudo-axes a sweep adds to the variant axes: `variant` takes key fragments
+/// (`"mode=generic,max_layers=4"`), for studies whose variants are not a product of axes.
+pub const EXTRA_AXES: [&str; 3] = ["active_layers", "material", "variant"];
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -429,7 +430,11 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
                         if !key_text.is_empty() {
                             key_text.push(',');
                         }
-                        key_text += &format!("{axis}={value}");
+                        if axis == "variant" {
+                            key_text += value;
+                        } else {
+                            key_text += &format!("{axis}={value}");
+                        }
                     }
                 }
             }
@@ -447,7 +452,8 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
                     message: format!("variant `{key_text}`: {e}"),
                 }
             })?;
-            if stack.layers.len() > variant.max_layers as usize {
+            // A per-material pipeline has the stack's own array size.
+            if !variant.mode.per_material() && stack.layers.len() > variant.max_layers as usize {
                 skipped.push(format!("{} with {variant}", stack.name));
                 continue;
             }

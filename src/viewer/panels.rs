@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::material::{gulbrandsen, presets, Stack};
 use crate::model::LayerParams;
 use crate::render::scene::Camera;
-use crate::variant::{Axis, Fgd, Model, Ndf, Tir, VariantKey, G2};
+use crate::variant::{Axis, Fgd, Mode, Model, Ndf, Tir, VariantKey, G2};
 
 use super::{orbit, stack_model, summary, ViewOptions, HISTORY};
 
@@ -35,6 +35,8 @@ pub struct Panels {
     requested: VariantKey,
     /// What the current pipeline was built from (`None` before the first build).
     compiled: Option<VariantKey>,
+    /// Pipelines built so far: a specialized pipeline is rebuilt on structural edits only.
+    builds: u32,
     message: Option<String>,
     presets: Vec<(String, PathBuf)>,
     envs: Vec<PathBuf>,
@@ -85,6 +87,7 @@ impl Panels {
             stack: options.stack.clone(),
             requested: options.variant,
             compiled: None,
+            builds: 0,
             message: None,
             presets,
             envs,
@@ -118,7 +121,10 @@ impl Panels {
     /// The variant the scene should render: the requested one, unless it cannot hold the
     /// stack (then the message says so and the last good one stays).
     pub fn variant_for_scene(&mut self) -> VariantKey {
-        if self.stack.layers.len() > self.requested.max_layers as usize {
+        // A per-material pipeline's arrays have the stack's own size.
+        if !self.requested.mode.per_material()
+            && self.stack.layers.len() > self.requested.max_layers as usize
+        {
             self.message = Some(format!(
                 "the stack has {} layers; max_layers={} holds at most {}: raise max_layers or \
                  remove layers",
@@ -141,6 +147,7 @@ impl Panels {
         match error {
             None => {
                 self.compiled = Some(variant);
+                self.builds += 1;
                 self.message = None;
                 self.history.clear();
             }
@@ -279,11 +286,15 @@ impl Panels {
         choose(ui, "fgd", &mut v.fgd, Fgd::VALUES);
         choose(ui, "g2", &mut v.g2, G2::VALUES);
         choose(ui, "ndf", &mut v.ndf, Ndf::VALUES);
+        // generic: one pipeline for every stack; specialized: rebuilt when an edit changes
+        // the stack's structure; specialized-values and baked: rebuilt on every edit.
+        choose(ui, "mode", &mut v.mode, Mode::VALUES);
         if self.requested != before {
             self.stack.model = stack_model(self.requested.model, self.stack.model);
             self.message = None;
         }
         ui.label(RichText::new(self.requested.to_string()).small());
+        ui.label(RichText::new(format!("pipelines built: {}", self.builds)).small());
     }
 
     fn scene(&mut self, ui: &mut Ui) {
@@ -393,7 +404,9 @@ impl Panels {
             Ok(valid) => {
                 self.artist.resize(valid.layers.len(), None);
                 self.stack = valid;
-                if self.stack.layers.len() > self.requested.max_layers as usize {
+                if !self.requested.mode.per_material()
+                    && self.stack.layers.len() > self.requested.max_layers as usize
+                {
                     self.message = Some(format!(
                         "the stack has {} layers; max_layers={} holds at most {}: raise max_layers",
                         self.stack.layers.len(),
