@@ -7,6 +7,7 @@
 //! command uses (opening the device, the validation check, progress bars, asset paths).
 
 mod args;
+mod bake_error;
 mod bench;
 mod count_worker;
 mod devices;
@@ -69,6 +70,8 @@ enum Command {
     Sheet(sheet::SheetArgs),
     /// Interactive viewer: edit the layer stack, switch variants, watch the GPU time.
     View(view::ViewArgs),
+    /// How far a baked material (mode=baked) is from the per-pixel model, per table size.
+    BakeError(bake_error::BakeErrorArgs),
     /// Time variants of the shaded draw, interleaved, against the ggx baseline.
     Bench(bench::BenchArgs),
     /// Run a sweep file (profiling/sweeps/*.toml): results.json, results.csv and charts per study.
@@ -95,6 +98,7 @@ pub fn run(cli: &Cli) -> Result<()> {
         Command::Render(args) => render::run(global, args),
         Command::Eval(args) => eval::run(global, args),
         Command::Furnace(args) => furnace::run(global, args),
+        Command::BakeError(args) => bake_error::run(global, args),
         Command::Sheet(args) => sheet::run(global, args),
         Command::View(args) => view::run(global, args),
         Command::Bench(args) => bench::run(global, args),

@@ -176,3 +176,70 @@ pub fn evaluator_for(gpu: &Gpu, variant: VariantKey, layers: usize) -> Result<Gp
         },
     )
 }
+
+/// The table sizes the error study compares (issue 11 §5).
+pub const STUDY_SIZES: [u32; 4] = [32, 64, 128, 256];
+
+/// A baked table of one size against the per-pixel model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BakeError {
+    pub size: u32,
+    /// [`max_lobe_error`] at the midpoints of a 511-interval grid of the view cosine.
+    pub lobe_error: f64,
+    /// The largest relative difference of a rendered pixel (any channel) between the baked
+    /// pass and the per-pixel pass of the same variant, over pixels whose radiance is at least
+    /// [`IMAGE_FLOOR`] (the render target holds half floats: 4.9e-4 is its resolution).
+    pub image_error: f64,
+}
+
+/// Radiances below this count as this in [`BakeError::image_error`].
+pub const IMAGE_FLOOR: f64 = 1e-2;
+
+/// The baked-table error study of one material: per size, the lobes against the model and the
+/// image against the per-pixel pass (`mode=generic` of `variant`'s other axes), rendered at
+/// `image_size`² by `renderer`.
+pub fn error_study(
+    renderer: &mut super::Renderer<'_>,
+    variant: VariantKey,
+    layers: &[LayerParams],
+    sizes: &[u32],
+    image_size: u32,
+) -> Result<Vec<BakeError>> {
+    let gpu = renderer.gpu();
+    let evaluator = evaluator_for(gpu, variant, layers.len())?;
+    let probes: Vec<f64> = (0..511)
+        .map(|i| (f64::from(i) + 0.5) / 511.0)
+        .filter(|&mu| mu >= MIN_COS)
+        .collect();
+    let exact = evaluator.evaluate(layers, &probes)?;
+    let generic = VariantKey {
+        mode: Mode::Generic,
+        ..evaluator.variant
+    };
+    let reference_pass = renderer.prepare(generic, layers)?;
+    let reference = renderer.render(&reference_pass, layers, image_size, image_size)?;
+    let baked_variant = VariantKey {
+        mode: Mode::Baked,
+        ..variant
+    };
+    sizes
+        .iter()
+        .map(|&size| {
+            let table = BakedTable::build(&evaluator, layers, size)?;
+            let pass = renderer.prepare_baked(baked_variant, layers, size)?;
+            let frame = renderer.render(&pass, layers, image_size, image_size)?;
+            let image_error = reference
+                .pixels
+                .iter()
+                .zip(&frame.pixels)
+                .flat_map(|(a, b)| (0..3).map(move |c| (f64::from(a[c]), f64::from(b[c]))))
+                .map(|(a, b)| (a - b).abs() / a.abs().max(IMAGE_FLOOR))
+                .fold(0.0, f64::max);
+            Ok(BakeError {
+                size,
+                lobe_error: max_lobe_error(&table, &probes, &exact),
+                image_error,
+            })
+        })
+        .collect()
+}

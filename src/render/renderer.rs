@@ -112,6 +112,11 @@ impl<'g> Renderer<'g> {
         })
     }
 
+    /// The device this renderer draws on.
+    pub fn gpu(&self) -> &'g Gpu {
+        self.gpu
+    }
+
     /// Replaces the drawn mesh (the sphere by default).
     pub fn set_mesh(&mut self, mesh: &Mesh) -> Result<()> {
         let device = &self.gpu.device;

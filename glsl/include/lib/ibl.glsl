@@ -17,11 +17,13 @@ float ibl_mip_of_alpha(float alpha, float mip_count) {
 }
 
 // Off-specular dominant direction (Lagarde & de Rousiers 2014, simple form):
-// lerp(N, R, (1 − α)(√(1 − α) + α)), then normalised for the cube lookup.
+// lerp(N, R, (1 − α)(√(1 − α) + α)). Not normalised: a cube lookup divides by the major axis
+// anyway, and the lerp of two unit vectors with N·R ≥ 0 (R is the view's mirror about N, or
+// the view itself) is never zero.
 vec3 ibl_dominant_direction(vec3 n, vec3 r, float alpha) {
     float a = clamp(alpha, 0.0, 1.0);
     float f = (1.0 - a) * (sqrt(1.0 - a) + a);
-    return normalize(mix(n, r, f));
+    return mix(n, r, f);
 }
 
 #endif
