@@ -12,21 +12,9 @@ use lamina::profile::bench::Case;
 use lamina::profile::counter::{count_instructions, CountRequest};
 use lamina::variant::VariantKey;
 
-#[test]
-fn instruction_counts_order_the_variants() {
-    let stack = Stack::resolve("varnished-gold").unwrap();
-    assert_eq!(stack.layers.len(), 2);
-    let keys = [
-        "model=ggx,max_layers=2",
-        "model=tm2,max_layers=2",
-        "model=tm2,max_layers=16",
-        "model=tm6,max_layers=2",
-        "model=tm2,max_layers=4",
-        "model=tm2,max_layers=4,fp16=on",
-        "model=tm2,max_layers=4,tir=lut32",
-        // The same case again, after the others: the count must repeat.
-        "model=tm2,max_layers=2",
-    ];
+/// The JIT instructions of `stack`'s shaded draw at 32×32 under each variant key, counted in
+/// one worker run (and printed).
+fn jit_counts(stack: &Stack, keys: &[&str]) -> Vec<u64> {
     let cases: Vec<Case> = keys
         .iter()
         .map(|k| Case {
@@ -50,7 +38,25 @@ fn instruction_counts_order_the_variants() {
     for (k, n) in keys.iter().zip(&counts) {
         println!("{:>14} JIT {:>14} all  {k}", n.jit, n.total);
     }
-    let jit: Vec<u64> = counts.iter().map(|c| c.jit).collect();
+    counts.iter().map(|c| c.jit).collect()
+}
+
+#[test]
+fn instruction_counts_order_the_variants() {
+    let stack = Stack::resolve("varnished-gold").unwrap();
+    assert_eq!(stack.layers.len(), 2);
+    let keys = [
+        "model=ggx,max_layers=2",
+        "model=tm2,max_layers=2",
+        "model=tm2,max_layers=16",
+        "model=tm6,max_layers=2",
+        "model=tm2,max_layers=4",
+        "model=tm2,max_layers=4,fp16=on",
+        "model=tm2,max_layers=4,tir=lut32",
+        // The same case again, after the others: the count must repeat.
+        "model=tm2,max_layers=2",
+    ];
+    let jit = jit_counts(&stack, &keys);
     let [ggx, tm2, tm2_16, tm6, tm2_4, tm2_4_fp16, tm2_4_lut32, tm2_again] = jit[..] else {
         panic!("one count per case");
     };
@@ -92,30 +98,7 @@ fn specialization_orders_the_counts() {
         "model=tm2,mode=specialized-values",
         "model=tm2,mode=baked",
     ];
-    let cases: Vec<Case> = keys
-        .iter()
-        .map(|k| Case {
-            variant: k.parse::<VariantKey>().unwrap(),
-            stack: stack.clone(),
-        })
-        .collect();
-    let env = common::repo_path("assets/env/studio.exr");
-    let counts = count_instructions(
-        &CountRequest {
-            exe: Path::new(env!("CARGO_BIN_EXE_lamina")),
-            global_args: Vec::new(),
-            env_map: &env,
-            cases: &cases,
-            width: 32,
-            height: 32,
-        },
-        |_, _| {},
-    )
-    .expect("callgrind worker");
-    for (k, n) in keys.iter().zip(&counts) {
-        println!("{:>14} JIT {:>14} all  {k}", n.jit, n.total);
-    }
-    let jit: Vec<u64> = counts.iter().map(|c| c.jit).collect();
+    let jit = jit_counts(&stack, &keys);
     let [generic_16, specialized_4, specialized_16, values, baked] = jit[..] else {
         panic!("one count per case");
     };

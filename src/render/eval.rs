@@ -7,7 +7,7 @@ use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::{Evaluation, LayerParams, Lobe};
 use crate::shader::interface::material_buffer;
 use crate::shader::kernel::{KernelInterface, LOCAL_SIZE_1D};
-use crate::shader::specialize::shade_spec;
+use crate::shader::specialize::{check_generic_fit, shade_spec};
 use crate::tables::fgd::FgdLookup;
 use crate::variant::{Mode, Model, ShadeSpec, VariantKey};
 use crate::vk::{
@@ -193,14 +193,7 @@ impl<'g> GpuEvaluator<'g> {
         let specialized;
         let kernel = match &self.kernel {
             Some(kernel) => {
-                let max_layers = self.variant.max_layers as usize;
-                if layers.is_empty() || layers.len() > max_layers {
-                    return Err(Error::Unsupported(format!(
-                        "the stack has {} layer(s); variant {} holds 1..={max_layers}",
-                        layers.len(),
-                        self.variant
-                    )));
-                }
+                check_generic_fit(self.variant, layers)?;
                 kernel
             }
             None => {

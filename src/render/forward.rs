@@ -5,7 +5,7 @@
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::model::LayerParams;
-use crate::shader::specialize::Structure;
+use crate::shader::specialize::{check_generic_fit, Structure};
 use crate::variant::{Mode, ShadeSpec, VariantKey};
 use crate::vk::{Buffer, Format, GraphicsDesc, Pipeline, PipelineLayout};
 
@@ -84,15 +84,7 @@ impl ForwardPass {
     /// pass, the same structure under `specialized`, the same stack under the other modes.
     pub fn check_material(&self, layers: &[LayerParams]) -> Result<()> {
         let Some(own) = &self.material else {
-            let max_layers = self.variant.max_layers as usize;
-            if layers.is_empty() || layers.len() > max_layers {
-                return Err(Error::Unsupported(format!(
-                    "the stack has {} layer(s); variant {} holds 1..={max_layers}",
-                    layers.len(),
-                    self.variant
-                )));
-            }
-            return Ok(());
+            return check_generic_fit(self.variant, layers);
         };
         let same = match self.variant.mode {
             Mode::Specialized => {

@@ -91,6 +91,18 @@ impl Structure {
     }
 }
 
+/// Errs unless a generic pipeline of `variant` holds `layers`: 1..=`max_layers` of them.
+pub fn check_generic_fit(variant: VariantKey, layers: &[LayerParams]) -> crate::error::Result<()> {
+    let max_layers = variant.max_layers as usize;
+    if layers.is_empty() || layers.len() > max_layers {
+        return Err(crate::error::Error::Unsupported(format!(
+            "the stack has {} layer(s); variant {variant} holds 1..={max_layers}",
+            layers.len()
+        )));
+    }
+    Ok(())
+}
+
 /// The lobes of a baked material (`render::baked`): how many, which are lit around the view,
 /// and the view-cosine samples per lobe.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
