@@ -208,7 +208,7 @@ pub fn run(
                 stdev_ms: s.stdev,
                 ratio_to_baseline: s.median / baseline_of(&case.stack.name),
                 fragment_invocations: *inv,
-                pipeline_ms: passes[p].pipeline.creation_time.as_secs_f64() * 1e3,
+                pipeline_ms: passes[p].pipeline.creation.duration.as_secs_f64() * 1e3,
                 spirv_bytes: passes[p].spirv_bytes,
                 instructions: None,
                 instructions_total: None,
