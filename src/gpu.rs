@@ -1,32 +1,98 @@
-//! The device and shader compiler every pass is built from, and the compute-kernel helper the
-//! table builders share.
+//! The device and shader compiler every pass is built from, the pipeline cache every pipeline
+//! goes through (`crate::pipeline_cache`: kept on disk between runs), and the compute-kernel
+//! helper the table builders share.
 
+use std::path::Path;
 use std::sync::Arc;
 
 use crate::error::Result;
+use crate::pipeline_cache::{self, PersistentCache};
 use crate::shader::kernel::{KernelInterface, WorkGroupSpec};
 use crate::shader::ShaderCompiler;
 use crate::vk::{
-    DescriptorSet, DescriptorSetLayout, Device, DeviceSelector, InstanceDesc, Pipeline,
-    PipelineLayout, Recorder, Stages,
+    DescriptorSet, DescriptorSetLayout, Device, DeviceSelector, GraphicsDesc, InstanceDesc,
+    Pipeline, PipelineCreation, PipelineLayout, Recorder, SpecConstants, Stages,
 };
+
+/// Called with a pipeline's name and how its creation went, for each pipeline a [`Gpu`] builds.
+type PipelineObserver = Box<dyn Fn(&str, &PipelineCreation) + Send + Sync>;
 
 pub struct Gpu {
     pub device: Arc<Device>,
     pub shaders: ShaderCompiler,
+    pipelines: PersistentCache,
+    observer: Option<PipelineObserver>,
 }
 
 impl Gpu {
+    /// The device `selector` picks, with the pipeline cache of `pipeline_cache::default_dir`.
     pub fn new(instance: InstanceDesc, selector: &DeviceSelector) -> Result<Self> {
+        Self::with_pipeline_cache(instance, selector, pipeline_cache::default_dir().as_deref())
+    }
+
+    /// [`Gpu::new`] with the pipeline cache's file in `dir`; `None`: in memory only.
+    pub fn with_pipeline_cache(
+        instance: InstanceDesc,
+        selector: &DeviceSelector,
+        dir: Option<&Path>,
+    ) -> Result<Self> {
+        let device = Device::create(instance, selector)?;
         Ok(Self {
-            device: Device::create(instance, selector)?,
+            pipelines: PersistentCache::open(&device, dir)?,
+            device,
             shaders: ShaderCompiler::new()?,
+            observer: None,
         })
     }
 
-    /// With the validation layer on: what the tests use.
+    /// With the validation layer on: what the tests use. The pipeline cache stays in memory,
+    /// so tests neither read nor write the user's.
     pub fn validated() -> Result<Self> {
-        Self::new(InstanceDesc::validated(), &DeviceSelector::Best)
+        Self::with_pipeline_cache(InstanceDesc::validated(), &DeviceSelector::Best, None)
+    }
+
+    /// The pipeline cache, and the file it is saved to.
+    pub fn pipeline_cache(&self) -> &PersistentCache {
+        &self.pipelines
+    }
+
+    /// Calls `observer` with each pipeline built from now on (the commands print them).
+    pub fn on_pipeline_built(
+        &mut self,
+        observer: impl Fn(&str, &PipelineCreation) + Send + Sync + 'static,
+    ) {
+        self.observer = Some(Box::new(observer));
+    }
+
+    fn built(&self, pipeline: Pipeline, name: &str) -> Pipeline {
+        if let Some(observer) = &self.observer {
+            observer(name, &pipeline.creation);
+        }
+        pipeline
+    }
+
+    /// A graphics pipeline, through the pipeline cache.
+    pub fn graphics_pipeline<S: SpecConstants>(
+        &self,
+        layout: &PipelineLayout,
+        desc: &GraphicsDesc<'_>,
+        spec: &S,
+        name: &str,
+    ) -> Result<Pipeline> {
+        let pipeline = Pipeline::graphics(self.pipelines.cache(), layout, desc, spec, name)?;
+        Ok(self.built(pipeline, name))
+    }
+
+    /// A compute pipeline, through the pipeline cache.
+    pub fn compute_pipeline<S: SpecConstants>(
+        &self,
+        layout: &PipelineLayout,
+        spirv: &[u32],
+        spec: &S,
+        name: &str,
+    ) -> Result<Pipeline> {
+        let pipeline = Pipeline::compute(self.pipelines.cache(), layout, spirv, spec, name)?;
+        Ok(self.built(pipeline, name))
     }
 }
 
@@ -69,7 +135,7 @@ impl ComputeKernel {
         let layout =
             PipelineLayout::new(device, &sets, interface.push.size, Stages::Compute, entry)?;
         let spec = spec.with_local_size(interface.local_size);
-        let pipeline = Pipeline::compute(device, &layout, &spirv, &spec, entry)?;
+        let pipeline = gpu.compute_pipeline(&layout, &spirv, &spec, entry)?;
         Ok(Self {
             interface: *interface,
             set_layout,

@@ -7,6 +7,7 @@
 
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use half::f16;
 
@@ -127,7 +128,10 @@ pub fn write_atomically(
         .file_name()
         .ok_or_else(|| output_error("not a file name".into()))?
         .to_string_lossy();
-    let temp: PathBuf = parent.join(format!(".{name}.{}.tmp", std::process::id()));
+    // Unique per process and call: two threads saving the same file must not share a temp.
+    static WRITES: AtomicU64 = AtomicU64::new(0);
+    let call = WRITES.fetch_add(1, Ordering::Relaxed);
+    let temp: PathBuf = parent.join(format!(".{name}.{}.{call}.tmp", std::process::id()));
     let result = write(&temp).and_then(|()| {
         std::fs::rename(&temp, path).map_err(|e| format!("renaming the temporary file: {e}"))
     });

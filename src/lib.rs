@@ -2,6 +2,8 @@
 //!
 //! Module map (DESIGN.md §3):
 //! - [`vk`] — the only module with raw `ash` — instance, device, memory, pipelines, queries;
+//! - [`gpu`] — the device, shader compiler and pipeline cache every pass is built from;
+//! - [`pipeline_cache`] — the pipeline cache's file: where, keyed how, trusted when;
 //! - [`variant`] — the typed variant key: the axes a shader is specialized on;
 //! - [`shader`] — GLSL → SPIR-V with shaderc, the shading and kernel interfaces;
 //! - [`tables`] — GPU-built tables (prefiltered environment, split-sum, FGD, TIR) with CPU
@@ -26,6 +28,7 @@ pub mod material;
 pub mod model;
 pub mod oracle;
 pub mod output;
+pub mod pipeline_cache;
 pub mod profile;
 pub mod render;
 pub mod shader;

@@ -11,7 +11,9 @@ use lamina::profile::counter::{self, CounterSetup};
 use lamina::Size;
 
 use super::args::{CounterArg, EnvArg};
-use super::{asset_path, check_validation, follow, progress_bar, GlobalArgs};
+use super::{
+    asset_path, check_validation, follow, print_pipelines, progress_bar, save_pipelines, GlobalArgs,
+};
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
@@ -63,7 +65,7 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    let gpu = global.open_gpu()?;
+    let mut gpu = global.open_gpu()?;
     let config = BenchConfig {
         cases,
         width: args.size.width,
@@ -72,6 +74,7 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
         warmup: args.warmup,
     };
     let bar = progress_bar("frames");
+    print_pipelines(&mut gpu, Some(&bar));
     let mut results = bench::run(&gpu, &equirect, &config, follow(&bar))?;
     bar.finish_and_clear();
     check_validation(&gpu)?;
@@ -100,5 +103,6 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
         imageio::write_file_atomically(path, results.csv())?;
         println!("wrote {}", path.display());
     }
+    save_pipelines(&gpu);
     Ok(())
 }

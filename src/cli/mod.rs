@@ -141,6 +141,31 @@ fn check_validation(gpu: &Gpu) -> Result<()> {
     Ok(())
 }
 
+/// Prints `compiled <name> in 12.3 ms (cache hit|miss|unknown)` on stderr for every pipeline
+/// `gpu` builds from now on, above `bar` when it is drawn.
+fn print_pipelines(gpu: &mut Gpu, bar: Option<&ProgressBar>) {
+    let bar = bar.cloned();
+    gpu.on_pipeline_built(move |name, creation| {
+        let line = format!(
+            "compiled {name} in {:.1} ms (cache {})",
+            creation.duration.as_secs_f64() * 1e3,
+            creation.cache_outcome()
+        );
+        match &bar {
+            Some(bar) => bar.suspend(|| eprintln!("{line}")),
+            None => eprintln!("{line}"),
+        }
+    });
+}
+
+/// Saves the pipeline cache for the next run; a failure only costs compiles then, so it is a
+/// warning.
+fn save_pipelines(gpu: &Gpu) {
+    if let Err(e) = gpu.pipeline_cache().save() {
+        eprintln!("warning: the pipeline cache was not saved (the next run compiles again): {e}");
+    }
+}
+
 /// A progress bar on stderr (hidden when stderr is not a terminal).
 fn progress_bar(what: &str) -> ProgressBar {
     let bar = ProgressBar::new(0);

@@ -10,7 +10,7 @@ use lamina::render::Renderer;
 use lamina::tables::environment::EnvDesc;
 
 use super::args::{self, SceneArgs, SceneDefaults};
-use super::{asset_path, GlobalArgs};
+use super::{asset_path, print_pipelines, save_pipelines, GlobalArgs};
 
 #[derive(clap::Args)]
 pub struct RenderArgs {
@@ -47,7 +47,8 @@ pub fn run(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
     let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
     let (stack, variant) = resolve_with_variant(&scene.material, scene.variant.as_deref())?;
     let layers = stack.params();
-    let gpu = global.open_gpu()?;
+    let mut gpu = global.open_gpu()?;
+    print_pipelines(&mut gpu, None);
     let mut renderer = Renderer::new(&gpu, &equirect, EnvDesc::default())?;
     let pass = renderer.prepare(variant, &layers)?;
     let (width, height) = (scene.size.width, scene.size.height);
@@ -105,5 +106,6 @@ pub fn run(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
         args.out.display(),
         args.png.display()
     );
+    save_pipelines(&gpu);
     Ok(())
 }

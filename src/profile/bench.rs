@@ -81,6 +81,10 @@ pub struct Run {
     pub ratio_to_baseline: f64,
     pub fragment_invocations: Option<u64>,
     pub pipeline_ms: f64,
+    /// Whether the driver found the pipeline in the pipeline cache; `null` where it does not
+    /// say (`vk::PipelineCreation::cache_hit`).
+    #[serde(default)]
+    pub pipeline_cache_hit: Option<bool>,
     pub spirv_bytes: usize,
     /// Instructions executed in llvmpipe's JIT-compiled code (the shaders and triangle setup)
     /// during the shaded draw, under callgrind (`--counter instructions`); deterministic.
@@ -208,7 +212,8 @@ pub fn run(
                 stdev_ms: s.stdev,
                 ratio_to_baseline: s.median / baseline_of(&case.stack.name),
                 fragment_invocations: *inv,
-                pipeline_ms: passes[p].pipeline.creation_time.as_secs_f64() * 1e3,
+                pipeline_ms: passes[p].pipeline.creation.duration.as_secs_f64() * 1e3,
+                pipeline_cache_hit: passes[p].pipeline.creation.cache_hit,
                 spirv_bytes: passes[p].spirv_bytes,
                 instructions: None,
                 instructions_total: None,

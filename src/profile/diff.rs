@@ -301,6 +301,7 @@ mod tests {
             ratio_to_baseline: ratio,
             fragment_invocations: None,
             pipeline_ms: 0.0,
+            pipeline_cache_hit: None,
             spirv_bytes: 0,
             instructions: jit,
             instructions_total: None,

@@ -657,6 +657,7 @@ mod tests {
             ratio_to_baseline: 1.0,
             fragment_invocations: None,
             pipeline_ms: 0.0,
+            pipeline_cache_hit: None,
             spirv_bytes: 0,
             instructions: Some(jit),
             instructions_total: Some(total),

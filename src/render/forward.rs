@@ -60,13 +60,7 @@ impl ForwardPass {
             color_format,
             cull_back: true,
         };
-        let pipeline = Pipeline::graphics(
-            &gpu.device,
-            layout,
-            &desc,
-            spec,
-            &format!("forward {variant}"),
-        )?;
+        let pipeline = gpu.graphics_pipeline(layout, &desc, spec, &format!("forward {variant}"))?;
         Ok(Self {
             variant,
             pipeline,

@@ -21,7 +21,7 @@ impl SkyPass {
             color_format,
             cull_back: false,
         };
-        let pipeline = Pipeline::graphics(&gpu.device, layout, &desc, &(), "sky")?;
+        let pipeline = gpu.graphics_pipeline(layout, &desc, &(), "sky")?;
         Ok(Self { pipeline })
     }
 }

@@ -43,15 +43,22 @@ impl Key {
     }
 }
 
-/// The default cache directory; `None` when neither `LAMINA_CACHE` nor `HOME` is set.
-pub fn dir() -> Option<PathBuf> {
-    let base = std::env::var_os("LAMINA_CACHE")
+/// lamina's cache root, `$LAMINA_CACHE` (default `~/.cache/lamina`): the tables live in
+/// `tables/` under it, the pipeline caches in `pipelines/` (`crate::pipeline_cache`). `None` when
+/// neither `LAMINA_CACHE` nor `HOME` is set.
+pub fn root() -> Option<PathBuf> {
+    std::env::var_os("LAMINA_CACHE")
         .map(PathBuf::from)
-        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache/lamina")))?;
-    Some(base.join("tables"))
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache/lamina")))
 }
 
-fn checksum(bytes: &[u8]) -> u64 {
+/// The default cache directory; `None` when neither `LAMINA_CACHE` nor `HOME` is set.
+pub fn dir() -> Option<PathBuf> {
+    Some(root()?.join("tables"))
+}
+
+/// FNV-1a over `bytes`: catches a file edited or damaged after it was written.
+pub(crate) fn checksum(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
         (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
     })

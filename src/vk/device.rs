@@ -44,6 +44,14 @@ pub struct DeviceReport {
     pub driver_name: String,
     pub driver_info: String,
     pub vendor_id: u32,
+    pub device_id: u32,
+    /// `VkDriverId`: which driver, whatever its version.
+    pub driver_id: u32,
+    /// The driver's own version encoding (not the API's).
+    pub driver_version: u32,
+    /// Pipeline-cache data is compatible between devices that report the same vendor, device
+    /// and UUID (`src/vk/pipeline_cache.rs`).
+    pub pipeline_cache_uuid: [u8; vk::UUID_SIZE],
     pub device_type: String,
     pub api_version: String,
     pub shader_float16: bool,
@@ -118,6 +126,10 @@ fn report(instance: &ash::Instance, index: usize, pd: vk::PhysicalDevice) -> Dev
         driver_name: c_str_lossy(driver.driver_name_as_c_str()),
         driver_info: c_str_lossy(driver.driver_info_as_c_str()),
         vendor_id: props.vendor_id,
+        device_id: props.device_id,
+        driver_id: driver.driver_id.as_raw() as u32,
+        driver_version: props.driver_version,
+        pipeline_cache_uuid: props.pipeline_cache_uuid,
         device_type: format!("{:?}", props.device_type),
         api_version: version_string(props.api_version),
         shader_float16: f12.shader_float16 == vk::TRUE,

@@ -22,6 +22,7 @@ mod instance;
 mod memory;
 mod overlay;
 mod pipeline;
+mod pipeline_cache;
 mod query;
 mod swapchain;
 
@@ -37,8 +38,9 @@ pub use image::{Image, ImageDesc, ImageKind, ImageView, Sampler, SamplerDesc};
 pub use instance::{Instance, InstanceDesc, MessageCounts};
 pub use overlay::Overlay;
 pub use pipeline::{
-    ExecutableStat, ExecutableStats, GraphicsDesc, Pipeline, PipelineLayout, SpecConstants,
-    SpecEntry,
+    ExecutableStat, ExecutableStats, GraphicsDesc, Pipeline, PipelineCreation, PipelineLayout,
+    SpecConstants, SpecEntry,
 };
+pub use pipeline_cache::{CacheData, CacheDataError, PipelineCache};
 pub use query::{GpuProfiler, Nanos, ScopeError, ScopeTiming, ScopeToken};
 pub use swapchain::{submit_frame, Acquired, Semaphore, Surface, Swapchain};

@@ -3,6 +3,11 @@
 //! Specialization constants come from a `#[repr(C)]` + `Pod` struct whose map entries are built
 //! with `offset_of!` by [`spec_constants!`](crate::spec_constants), so the host struct is the one
 //! source of truth for ids and offsets and a pipeline is created from a struct literal.
+//!
+//! Pipelines are created through a [`PipelineCache`] (which names their device), and each
+//! records how long its creation took and whether the driver found it in that cache
+//! (`VkPipelineCreationFeedback`, core in Vulkan 1.3; drivers that give no valid feedback leave
+//! it unknown).
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -12,6 +17,7 @@ use ash::vk;
 use super::descriptor::{DescriptorSetLayout, Stages};
 use super::device::Device;
 use super::error::{Check, VkError, VkResult};
+use super::pipeline_cache::PipelineCache;
 
 /// One specialization constant: its `constant_id` and where it lives in the host struct.
 #[derive(Clone, Copy, Debug)]
@@ -132,22 +138,57 @@ impl Drop for PipelineLayout {
     }
 }
 
-/// A compute or graphics pipeline, and how long the driver took to build it.
+/// How a pipeline's creation went.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PipelineCreation {
+    /// Host time of the `vkCreate*Pipelines` call.
+    pub duration: Duration,
+    /// Whether the driver found the pipeline in the pipeline cache
+    /// (`APPLICATION_PIPELINE_CACHE_HIT`); `None` where its feedback is not valid.
+    pub cache_hit: Option<bool>,
+}
+
+impl PipelineCreation {
+    fn new(duration: Duration, feedback: vk::PipelineCreationFeedback) -> Self {
+        let flags = feedback.flags;
+        Self {
+            duration,
+            cache_hit: flags
+                .contains(vk::PipelineCreationFeedbackFlags::VALID)
+                .then(|| {
+                    flags
+                        .contains(vk::PipelineCreationFeedbackFlags::APPLICATION_PIPELINE_CACHE_HIT)
+                }),
+        }
+    }
+
+    /// `hit`, `miss` or `unknown`.
+    pub fn cache_outcome(&self) -> &'static str {
+        match self.cache_hit {
+            Some(true) => "hit",
+            Some(false) => "miss",
+            None => "unknown",
+        }
+    }
+}
+
+/// A compute or graphics pipeline, and how its creation went.
 pub struct Pipeline {
     device: Arc<Device>,
     pub(crate) raw: vk::Pipeline,
     pub(crate) bind_point: vk::PipelineBindPoint,
-    pub creation_time: Duration,
+    pub creation: PipelineCreation,
 }
 
 impl Pipeline {
     pub fn compute<S: SpecConstants>(
-        device: &Arc<Device>,
+        cache: &PipelineCache,
         layout: &PipelineLayout,
         spirv: &[u32],
         spec: &S,
         name: &str,
     ) -> VkResult<Self> {
+        let device = &cache.device;
         let module = ShaderModule::new(device, spirv)?;
         let entries = map_entries::<S>();
         let spec_info = vk::SpecializationInfo::default()
@@ -158,38 +199,44 @@ impl Pipeline {
             .module(module.raw)
             .name(c"main")
             .specialization_info(&spec_info);
+        let mut feedback = vk::PipelineCreationFeedback::default();
+        let mut feedback_info = vk::PipelineCreationFeedbackCreateInfo::default()
+            .pipeline_creation_feedback(&mut feedback);
         let info = vk::ComputePipelineCreateInfo::default()
             .stage(stage)
             .layout(layout.raw)
-            .flags(capture_flags(device));
+            .flags(capture_flags(device))
+            .push_next(&mut feedback_info);
         let start = Instant::now();
-        // SAFETY: all pointers borrow locals that outlive the call.
+        // SAFETY: all pointers borrow locals that outlive the call; the cache is internally
+        // synchronized.
         let raw = unsafe {
             device
                 .raw
-                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+                .create_compute_pipelines(cache.raw, &[info], None)
         }
         .map_err(|(_, result)| VkError::Vk {
             call: "vkCreateComputePipelines",
             result,
         })?[0];
-        let creation_time = start.elapsed();
+        let creation = PipelineCreation::new(start.elapsed(), feedback);
         device.set_name(raw, name);
         Ok(Self {
             device: device.clone(),
             raw,
             bind_point: vk::PipelineBindPoint::COMPUTE,
-            creation_time,
+            creation,
         })
     }
 
     pub fn graphics<S: SpecConstants>(
-        device: &Arc<Device>,
+        cache: &PipelineCache,
         layout: &PipelineLayout,
         desc: &GraphicsDesc<'_>,
         spec: &S,
         name: &str,
     ) -> VkResult<Self> {
+        let device = &cache.device;
         let vertex = ShaderModule::new(device, desc.vertex)?;
         let fragment = ShaderModule::new(device, desc.fragment)?;
         let entries = map_entries::<S>();
@@ -257,6 +304,9 @@ impl Pipeline {
         let color_formats = [desc.color_format];
         let mut rendering =
             vk::PipelineRenderingCreateInfo::default().color_attachment_formats(&color_formats);
+        let mut feedback = vk::PipelineCreationFeedback::default();
+        let mut feedback_info = vk::PipelineCreationFeedbackCreateInfo::default()
+            .pipeline_creation_feedback(&mut feedback);
         let info = vk::GraphicsPipelineCreateInfo::default()
             .stages(&stages)
             .vertex_input_state(&vertex_input)
@@ -268,25 +318,27 @@ impl Pipeline {
             .dynamic_state(&dynamic)
             .layout(layout.raw)
             .flags(capture_flags(device))
-            .push_next(&mut rendering);
+            .push_next(&mut rendering)
+            .push_next(&mut feedback_info);
         let start = Instant::now();
-        // SAFETY: all pointers borrow locals that outlive the call.
+        // SAFETY: all pointers borrow locals that outlive the call; the cache is internally
+        // synchronized.
         let raw = unsafe {
             device
                 .raw
-                .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+                .create_graphics_pipelines(cache.raw, &[info], None)
         }
         .map_err(|(_, result)| VkError::Vk {
             call: "vkCreateGraphicsPipelines",
             result,
         })?[0];
-        let creation_time = start.elapsed();
+        let creation = PipelineCreation::new(start.elapsed(), feedback);
         device.set_name(raw, name);
         Ok(Self {
             device: device.clone(),
             raw,
             bind_point: vk::PipelineBindPoint::GRAPHICS,
-            creation_time,
+            creation,
         })
     }
 }

@@ -2,15 +2,22 @@
 //! the rule that any validation message fails the test.
 #![allow(dead_code, reason = "each test binary uses a different subset")]
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use lamina::imageio::{self, HdrImage};
 use lamina::model::LayerParams;
+use lamina::vk::{DeviceSelector, InstanceDesc};
 use lamina::Gpu;
 
 /// A device with the Khronos validation layer on.
 pub fn gpu() -> Gpu {
     Gpu::validated().expect("a Vulkan device with the validation layer (run scripts/setup.sh)")
+}
+
+/// [`gpu`] with its pipeline cache's file in `dir` (the tests' default keeps it in memory).
+pub fn gpu_with_pipeline_cache(dir: &Path) -> Gpu {
+    Gpu::with_pipeline_cache(InstanceDesc::validated(), &DeviceSelector::Best, Some(dir))
+        .expect("a Vulkan device with the validation layer (run scripts/setup.sh)")
 }
 
 /// Fails when the validation layer said anything of warning or error severity.
