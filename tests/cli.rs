@@ -561,3 +561,89 @@ fn report_refuses_a_study_whose_files_disagree() {
     assert!(!message.contains("panicked"), "{message}");
     assert!(!dir.join("REPORT.md").exists());
 }
+
+/// A 6-flux stack with a zero-depth medium (layer 1) and an index-matched layer (layer 2).
+const SIMPLIFIABLE: &str = r#"name = "simplifiable"
+model = "tm6"
+
+[[layer]]
+ior = [1.5, 1.5, 1.5]
+roughness = 0.1
+depth = 0.0
+sigma_s = [2.0, 2.0, 2.0]
+
+[[layer]]
+ior = [1.5, 1.5, 1.5]
+roughness = 0.3
+
+[[layer]]
+ior = [0.143245, 0.377423, 1.43919]
+kappa = [3.98479, 2.3847, 1.60434]
+roughness = 0.3
+"#;
+
+#[test]
+fn simplify_names_each_step_and_writes_the_simplified_stack() {
+    let dir = common::scratch_dir("cli-simplify");
+    std::fs::write(dir.join("in.toml"), SIMPLIFIABLE).unwrap();
+    let out = lamina(&["simplify", "--material", "./in.toml"], &dir);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", stderr(&out));
+    for line in [
+        "simplifiable: 3 layers → 2",
+        "layer 2 (η 1.50) is index-matched with layer 1 above it: removed",
+        "layer 1's medium has depth 0: demoted to a 2-flux layer",
+    ] {
+        assert!(stdout.contains(line), "`{line}` missing from: {stdout}");
+    }
+    let out = lamina(
+        &[
+            "simplify",
+            "--material",
+            "./in.toml",
+            "--json",
+            "--out",
+            "simple.toml",
+        ],
+        &dir,
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["material"], "simplifiable");
+    assert_eq!(json["model"], "tm6");
+    assert_eq!(json["layers_before"], 3);
+    assert_eq!(json["layers_after"], 2);
+    let steps: Vec<_> = json["steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| (s["kind"].as_str().unwrap(), s["layer"].as_u64()))
+        .collect();
+    assert!(steps.contains(&("index-matched", Some(2))), "{steps:?}");
+    assert!(steps.contains(&("zero-depth-medium", Some(1))), "{steps:?}");
+    assert_eq!(json["stack"]["layer"].as_array().unwrap().len(), 2);
+    // The written file loads, and has nothing left to simplify; no temporary file is left.
+    let simple = lamina::material::Stack::load(&dir.join("simple.toml")).unwrap();
+    assert_eq!(simple.layers.len(), 2);
+    let again = lamina(&["simplify", "--material", "./simple.toml"], &dir);
+    let again = String::from_utf8_lossy(&again.stdout);
+    assert!(
+        again.starts_with("simplifiable: 2 layers, nothing to simplify\n"),
+        "{again}"
+    );
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 2);
+}
+
+#[test]
+fn simplify_says_when_there_is_nothing_to_simplify() {
+    let dir = common::scratch_dir("cli-simplify-nothing");
+    let out = lamina(&["simplify", "--material", "varnished-gold"], &dir);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout),
+        "varnished gold: 2 layers, nothing to simplify\n"
+    );
+    let out = lamina(&["simplify", "--material", "unobtainium"], &dir);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("unobtainium"), "{}", stderr(&out));
+}

@@ -17,6 +17,7 @@ mod furnace;
 mod render;
 mod report;
 mod sheet;
+mod simplify;
 mod sweep;
 mod tables;
 mod view;
@@ -66,6 +67,9 @@ enum Command {
     Eval(eval::EvalArgs),
     /// White-furnace test: reflected energy per view angle under a uniform white environment.
     Furnace(furnace::FurnaceArgs),
+    /// What static simplification removes from a material (index-matched layers, empty media,
+    /// layers no light reaches), and why; optionally the simplified material file.
+    Simplify(simplify::SimplifyArgs),
     /// Render every preset material in each variant into one tiled PNG.
     Sheet(sheet::SheetArgs),
     /// Interactive viewer: edit the layer stack, switch variants, watch the GPU time.
@@ -99,6 +103,7 @@ pub fn run(cli: &Cli) -> Result<()> {
         Command::Eval(args) => eval::run(global, args),
         Command::Furnace(args) => furnace::run(global, args),
         Command::BakeError(args) => bake_error::run(global, args),
+        Command::Simplify(args) => simplify::run(args),
         Command::Sheet(args) => sheet::run(global, args),
         Command::View(args) => view::run(global, args),
         Command::Bench(args) => bench::run(global, args),

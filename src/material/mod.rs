@@ -39,7 +39,8 @@
 //! [`Stack::variant`] gives the variant a stack is shaded with for a key that names only some
 //! axes (the model and `max_layers` follow the stack; `variant.rs`). [`random`] draws valid
 //! stacks over the whole of these ranges for the property tests (`properties.rs` runs the f64
-//! model over them).
+//! model over them). [`simplify`] takes out what the model provably ignores (index-matched
+//! layers, empty media, layers no light reaches) and says why.
 //!
 //! [`MAX_LAYERS_LIMIT`]: crate::variant::MAX_LAYERS_LIMIT
 
@@ -50,6 +51,9 @@ mod presets;
 #[cfg(test)]
 mod properties;
 pub mod random;
+pub mod simplify;
+#[cfg(test)]
+mod simplify_properties;
 #[cfg(test)]
 mod tests;
 mod variant;
