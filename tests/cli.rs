@@ -500,6 +500,124 @@ fn bench_writes_consistent_json_and_csv() {
     }
 }
 
+/// The per-pixel count on the sphere, whose draw carries per-draw costs (16 128 triangles'
+/// vertex shading and setup, partly covered blocks): in one run, the per-pixel ratio of a tm2
+/// variant to ggx is larger than the ratio of whole draws at the smaller size, and the count
+/// repeats exactly (ggx twice).
+#[test]
+fn bench_counts_instructions_per_shaded_pixel() {
+    let dir = common::scratch_dir("cli-bench-per-pixel");
+    let out = lamina(
+        &[
+            "--validation",
+            "bench",
+            "--scene",
+            "sphere",
+            "--variant",
+            "model=tm2,max_layers=4",
+            "--variant",
+            "model=ggx",
+            "--variant",
+            "model=ggx",
+            "--size",
+            "16x16",
+            "--frames",
+            "1",
+            "--warmup",
+            "0",
+            "--counter",
+            "instructions",
+            "--counter-sizes",
+            "16x16,32x32",
+            "--json",
+            "results.json",
+            "--csv",
+            "results.csv",
+        ],
+        &dir,
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", stderr(&out));
+    println!("{stdout}");
+    assert!(stdout.contains("JIT/pixel"), "{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("results.json")).unwrap()).unwrap();
+    assert_eq!(json["scene"], "sphere");
+    assert_eq!(
+        json["counter"]["sizes"],
+        serde_json::json!([[16, 16], [32, 32]])
+    );
+    let pixels: Vec<u64> = json["counter"]["shaded_pixels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p.as_u64().unwrap())
+        .collect();
+    assert!(0 < pixels[0] && pixels[0] < pixels[1], "{pixels:?}");
+    let runs = json["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 3, "tm2, ggx, ggx: the baseline is given");
+    let count = |run: &serde_json::Value, key: &str| run[key].as_u64().unwrap();
+    for run in runs {
+        let per_pixel = run["instructions_per_pixel"].as_f64().unwrap();
+        let expected = (count(run, "instructions_large") - count(run, "instructions")) as f64
+            / (pixels[1] - pixels[0]) as f64;
+        assert!((per_pixel - expected).abs() < 1e-9 * expected, "{run}");
+        assert!(count(run, "instructions_total_large") > count(run, "instructions_total"));
+    }
+    let (tm2, ggx, ggx_again) = (&runs[0], &runs[1], &runs[2]);
+    for key in ["instructions", "instructions_large"] {
+        assert_eq!(count(ggx, key), count(ggx_again, key), "{key} repeats");
+    }
+    assert_eq!(ggx["instructions_per_pixel_ratio"].as_f64(), Some(1.0));
+    let per_pixel_ratio = tm2["instructions_per_pixel_ratio"].as_f64().unwrap();
+    let whole_draw_ratio = count(tm2, "instructions") as f64 / count(ggx, "instructions") as f64;
+    println!("tm2/ggx: {per_pixel_ratio:.2} per pixel, {whole_draw_ratio:.2} whole draw at 16x16");
+    assert!(
+        per_pixel_ratio > whole_draw_ratio,
+        "per pixel {per_pixel_ratio} <= whole draw {whole_draw_ratio}"
+    );
+    let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    assert!(csv
+        .lines()
+        .next()
+        .unwrap()
+        .ends_with("instructions_per_pixel,instructions_per_pixel_ratio"));
+}
+
+#[test]
+fn bench_refuses_bad_scenes_and_counter_sizes() {
+    let dir = common::scratch_dir("cli-bench-bad");
+    for (args, words) in [
+        (["--scene", "cube"], vec!["cube", "sphere, fullscreen"]),
+        (
+            ["--counter-sizes", "48x48,48x48"],
+            vec!["--counter-sizes", "both have 2304 pixels"],
+        ),
+        (
+            ["--counter-sizes", "96x96,48x48"],
+            vec!["--counter-sizes", "smaller size first"],
+        ),
+        (["--counter-sizes", "48x48"], vec!["SMALL,LARGE"]),
+        (
+            ["--counter-sizes", "48x48,96x0"],
+            vec!["--counter-sizes", "height", "1..=16384"],
+        ),
+    ] {
+        let mut full = vec!["bench", "--variant", "model=tm2", "--json", "r.json"];
+        full.extend_from_slice(&args);
+        let out = lamina(&full, &dir);
+        let message = stderr(&out);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        for word in words {
+            assert!(
+                message.contains(word),
+                "{args:?}: `{word}` missing from {message}"
+            );
+        }
+        assert!(!dir.join("r.json").exists());
+    }
+}
+
 #[test]
 fn diff_pairs_committed_results_and_gates_on_instruction_growth() {
     let results =

@@ -10,7 +10,9 @@ use std::path::Path;
 use lamina::material::Stack;
 use lamina::profile::bench::Case;
 use lamina::profile::counter::{count_instructions, CountRequest};
+use lamina::render::scene::Scene;
 use lamina::variant::VariantKey;
+use lamina::Size;
 
 /// The JIT instructions of `stack`'s shaded draw at 32×32 under each variant key, counted in
 /// one worker run (and printed).
@@ -29,12 +31,17 @@ fn jit_counts(stack: &Stack, keys: &[&str]) -> Vec<u64> {
             global_args: Vec::new(),
             env_map: &env,
             cases: &cases,
-            width: 32,
-            height: 32,
+            scene: Scene::Sphere,
+            sizes: &[Size {
+                width: 32,
+                height: 32,
+            }],
         },
         |_, _| {},
     )
     .expect("callgrind worker");
+    // One size: these gates order whole draws.
+    let counts: Vec<_> = counts.into_iter().map(|by_size| by_size[0]).collect();
     for (k, n) in keys.iter().zip(&counts) {
         println!("{:>14} JIT {:>14} all  {k}", n.jit, n.total);
     }

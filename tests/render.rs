@@ -3,6 +3,8 @@
 mod common;
 
 use glam::Vec3;
+use lamina::profile::bench::place_scene;
+use lamina::render::scene::{Mesh, Scene, Vertex};
 use lamina::render::Renderer;
 use lamina::tables::environment::{self, EnvDesc};
 use lamina::variant::VariantKey;
@@ -109,6 +111,58 @@ fn timestamps_are_ordered_and_full_screen_invocations_match_pixels() {
     );
     let shaded = frame.shaded.fragment_invocations.unwrap() as f64;
     assert!(shaded > 0.1 * pixels && shaded < pixels, "{shaded}");
+    common::assert_validation_clean(&gpu);
+}
+
+/// The pixels the per-pixel instruction count divides by ([`Scene::shaded_pixels`], rasterised
+/// on the CPU) are the pixels the GPU shades: those that differ from a frame of the sky alone.
+/// The full-screen scene shades all of them. lavapipe's fragment-invocation statistic cannot
+/// show it: it adds 16 per 4×4 block each primitive touches ("pixel accuracy is not required",
+/// Mesa's `lp_state_fs.c`), and even a single full-screen triangle counts 4 to 8 more per row.
+#[test]
+fn scenes_shade_the_pixels_they_count_and_full_screen_shades_all() {
+    let gpu = common::gpu();
+    let desc = EnvDesc {
+        face_size: 64,
+        mip_count: 5,
+        samples: 16,
+    };
+    let mut renderer = Renderer::new(&gpu, &common::studio(), desc).unwrap();
+    let pass = renderer
+        .prepare(VariantKey::default(), &common::gold())
+        .unwrap();
+    let nothing = Mesh {
+        vertices: vec![
+            Vertex {
+                position: [0.0; 3],
+                normal: [0.0, 0.0, 1.0],
+            };
+            3
+        ],
+        indices: vec![0, 1, 2],
+    };
+    for (w, h) in [(48, 48), (64, 40), (37, 23)] {
+        renderer.set_mesh(&nothing).unwrap();
+        let sky = renderer.render(&pass, &common::gold(), w, h).unwrap();
+        for scene in [Scene::FullScreen, Scene::Sphere] {
+            place_scene(&mut renderer, scene, w, h).unwrap();
+            let frame = renderer.render(&pass, &common::gold(), w, h).unwrap();
+            let shaded = frame
+                .pixels
+                .iter()
+                .zip(&sky.pixels)
+                .filter(|(a, b)| a != b)
+                .count() as u64;
+            let counted = scene.shaded_pixels(&renderer.camera, w, h);
+            let invocations = frame.shaded.fragment_invocations;
+            println!("{scene} at {w}x{h}: {shaded} pixels shaded, {counted} counted, {invocations:?} fragment invocations");
+            assert_eq!(shaded, counted, "{scene} at {w}x{h}");
+            if scene == Scene::FullScreen {
+                assert_eq!(shaded, u64::from(w * h), "{w}x{h}");
+                assert!(invocations.unwrap() >= shaded);
+            }
+        }
+    }
     common::assert_validation_clean(&gpu);
 }
 

@@ -5,7 +5,9 @@ mod common;
 use std::path::Path;
 use std::process::{Command, Output};
 
+use lamina::profile::counter::CounterSizes;
 use lamina::profile::sweep;
+use lamina::render::scene::Scene;
 
 fn lamina(args: &[&str], dir: &Path) -> Output {
     Command::new(env!("CARGO_BIN_EXE_lamina"))
@@ -101,12 +103,16 @@ fn a_sweep_writes_schema_json_matching_csv_charts_and_a_report() {
             assert_eq!(run["ratio_to_baseline"].as_f64().unwrap(), 1.0);
         }
     }
+    assert_eq!(json["scene"], "fullscreen", "a sweep file's default scene");
     let csv = std::fs::read_to_string(res.join("results.csv")).unwrap();
+    // Variant keys hold commas: find the median's column counting from the end.
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let from_end = header.len() - header.iter().position(|&c| c == "median_ms").unwrap();
     let rows: Vec<&str> = csv.lines().skip(1).collect();
     assert_eq!(rows.len(), runs.len());
     for (row, run) in rows.iter().zip(runs) {
         let fields: Vec<&str> = row.split(',').collect();
-        let median: f64 = fields[fields.len() - 10].parse().unwrap();
+        let median: f64 = fields[fields.len() - from_end].parse().unwrap();
         assert!(row.contains(run["variant"].as_str().unwrap()));
         assert_eq!(median, run["median_ms"].as_f64().unwrap());
     }
@@ -174,6 +180,40 @@ fn bad_sweep_files_are_refused_before_any_gpu_work() {
     assert!(e.contains("colour"), "{e}");
     let e = load_error("counter", "counter = \"cycles\"\n");
     assert!(e.contains("`counter`") && e.contains("instructions"), "{e}");
+    let e = load_error("scene", "scene = \"cube\"\n");
+    assert!(
+        e.contains("`scene`") && e.contains("sphere, fullscreen"),
+        "{e}"
+    );
+    let counted = "counter = \"instructions\"\n";
+    for (sizes, words) in [
+        (
+            "[\"48x48\", \"48x48\"]",
+            vec!["counter_sizes", "both have 2304 pixels"],
+        ),
+        (
+            "[\"96x96\", \"48x48\"]",
+            vec!["counter_sizes", "smaller size first"],
+        ),
+        (
+            "[\"48x48\"]",
+            vec!["counter_sizes", "1 size(s)", "give two"],
+        ),
+        (
+            "[\"48x48\", \"0x96\"]",
+            vec!["counter_sizes", "`0x96`", "WxH"],
+        ),
+    ] {
+        let e = load_error("sizes", &format!("{counted}counter_sizes = {sizes}\n"));
+        for w in words {
+            assert!(e.contains(w), "{sizes}: `{w}` missing from {e}");
+        }
+    }
+    let e = load_error("old-size", "counter_size = \"24x24\"\n");
+    assert!(
+        e.contains("`counter_size`") && e.contains("counter_sizes = ["),
+        "{e}"
+    );
     let e = load_error("suite", "studies = [\"missing.toml\"]\n");
     assert!(e.contains("missing.toml"), "{e}");
 
@@ -214,7 +254,12 @@ fn every_committed_sweep_file_expands() {
             "{}: suite size applies",
             s.name
         );
-        assert_eq!(s.counter, Some((24, 24)));
+        assert_eq!(
+            s.counter.map(|c| c.to_string()).as_deref(),
+            Some("24x24,48x48"),
+            "{}: suite counter sizes apply",
+            s.name
+        );
     }
     for name in [
         "quick",
@@ -227,6 +272,14 @@ fn every_committed_sweep_file_expands() {
         "flux",
         "growth",
     ] {
-        sweep::load(&dir.join(format!("{name}.toml"))).unwrap();
+        let (studies, _) = sweep::load(&dir.join(format!("{name}.toml"))).unwrap();
+        assert_eq!(
+            studies[0].scene,
+            Scene::FullScreen,
+            "{name}: studies shade every pixel"
+        );
+        let mut study = studies[0].clone();
+        study.count_instructions();
+        assert_eq!(study.counter, Some(CounterSizes::DEFAULT));
     }
 }

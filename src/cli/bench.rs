@@ -7,7 +7,8 @@ use anyhow::{Context, Result};
 use lamina::imageio;
 use lamina::material::Stack;
 use lamina::profile::bench::{self, BenchConfig, Case};
-use lamina::profile::counter::{self, CounterSetup};
+use lamina::profile::counter::{self, CounterSetup, CounterSizes};
+use lamina::render::scene::Scene;
 use lamina::Size;
 
 use super::args::{CounterArg, EnvArg};
@@ -24,6 +25,10 @@ pub struct BenchArgs {
     /// Material file or preset name.
     #[arg(long, value_name = "FILE|PRESET", default_value = "varnished-gold")]
     material: String,
+    /// What the draw shades: `fullscreen`, every pixel once with the sphere's spread of view
+    /// angles (the talk's setup), or `sphere`, `render`'s image.
+    #[arg(long, default_value = "fullscreen", value_name = "SCENE")]
+    scene: Scene,
     #[arg(long, default_value = "640x360", value_name = "WxH")]
     size: Size,
     /// Measured frames per variant.
@@ -43,9 +48,11 @@ pub struct BenchArgs {
     /// Also count each variant's instructions under callgrind (lavapipe only).
     #[arg(long, value_enum)]
     counter: Option<CounterArg>,
-    /// Resolution of the counted draw (instructions grow with covered pixels).
-    #[arg(long, default_value = "48x48", value_name = "WxH")]
-    counter_size: Size,
+    /// The two resolutions of the counted draw, the smaller first: instructions per shaded
+    /// pixel are the difference of the two counts over the added pixels, so what a draw costs
+    /// whatever its size cancels; the whole-draw count is the smaller size's.
+    #[arg(long, default_value = "48x48,96x96", value_name = "WxH,WxH")]
+    counter_sizes: CounterSizes,
 }
 
 pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
@@ -68,6 +75,7 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
     let mut gpu = global.open_gpu()?;
     let config = BenchConfig {
         cases,
+        scene: args.scene,
         width: args.size.width,
         height: args.size.height,
         frames: args.frames,
@@ -81,12 +89,11 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
     if args.counter.is_some() {
         let setup = CounterSetup::for_device(&gpu, &env_path)?;
         let bar = progress_bar("counted (callgrind)");
-        let size = (args.counter_size.width, args.counter_size.height);
         counter::add_counts(
             &mut results,
             &setup,
             &config.with_baselines(),
-            size,
+            args.counter_sizes,
             |done, total| {
                 bar.set_length(total as u64);
                 bar.set_position(done as u64);

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use lamina::imageio;
 use lamina::profile::counter::{self, WorkerJob};
+use lamina::render::scene::Scene;
 use lamina::Size;
 
 use super::{check_validation, GlobalArgs};
@@ -16,14 +17,17 @@ pub struct CountWorkerArgs {
     job: PathBuf,
     #[arg(long, value_name = "FILE")]
     env: PathBuf,
-    #[arg(long, value_name = "WxH")]
-    size: Size,
+    #[arg(long, value_name = "SCENE")]
+    scene: Scene,
+    /// A counted resolution (repeated: every case is counted at each, in order).
+    #[arg(long = "size", value_name = "WxH", required = true)]
+    sizes: Vec<Size>,
 }
 
 pub fn run(global: &GlobalArgs, args: &CountWorkerArgs) -> Result<()> {
     let cases = WorkerJob::read_cases(&args.job)?;
     let equirect = imageio::read_exr(&args.env).context("reading the environment map")?;
     let gpu = global.open_gpu()?;
-    counter::worker(&gpu, &equirect, &cases, args.size.width, args.size.height)?;
+    counter::worker(&gpu, &equirect, &cases, args.scene, &args.sizes)?;
     check_validation(&gpu)
 }

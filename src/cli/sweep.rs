@@ -101,15 +101,16 @@ fn print_plan(args: &SweepArgs, list: &[sweep::Study], dir_of: &dyn Fn(&sweep::S
     );
     for s in list {
         println!(
-            "  {:<22} {:>3} case(s) at {}x{}, {}+{} frames{}{}  -> {}",
+            "  {:<22} {:>3} case(s) at {}x{} {}, {}+{} frames{}{}  -> {}",
             s.name,
             s.points.len(),
             s.width,
             s.height,
+            s.scene,
             s.warmup,
             s.frames,
             s.counter
-                .map(|(w, h)| format!(", instructions at {w}x{h}"))
+                .map(|c| format!(", instructions at {} and {}", c.small, c.large))
                 .unwrap_or_default(),
             if s.skipped.is_empty() {
                 String::new()

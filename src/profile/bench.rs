@@ -1,9 +1,11 @@
 //! `lamina bench`: every variant's pipeline built up front, frames interleaved round-robin so
 //! drift hits all variants alike, warm-up frames discarded, the shaded draw timed by the
 //! profiler scope and its fragment invocations counted; each variant's median divided by the
-//! `ggx` baseline's from the same run (DESIGN.md §7).
+//! `ggx` baseline's from the same run (DESIGN.md §7). The draw shades a [`Scene`]: the
+//! full-screen grid (every pixel once, the talk's setup) or `render`'s sphere.
 //!
-//! The result file is read by other tools: keep `results.json`'s fields (issue #5's schema).
+//! The result file is read by other tools: keep `results.json`'s fields (issue #5's schema);
+//! fields added since are optional when read, so older files still load.
 
 use serde::{Deserialize, Serialize};
 
@@ -13,6 +15,7 @@ use crate::imageio::HdrImage;
 use crate::material::Stack;
 use crate::model::LayerParams;
 use crate::render::forward::ForwardPass;
+use crate::render::scene::Scene;
 use crate::render::Renderer;
 use crate::tables::environment::EnvDesc;
 use crate::variant::{Model, VariantKey};
@@ -28,6 +31,7 @@ pub struct Case {
 
 pub struct BenchConfig {
     pub cases: Vec<Case>,
+    pub scene: Scene,
     pub width: u32,
     pub height: u32,
     pub frames: u32,
@@ -87,11 +91,28 @@ pub struct Run {
     pub pipeline_cache_hit: Option<bool>,
     pub spirv_bytes: usize,
     /// Instructions executed in llvmpipe's JIT-compiled code (the shaders and triangle setup)
-    /// during the shaded draw, under callgrind (`--counter instructions`); deterministic.
+    /// during the shaded draw, under callgrind (`--counter instructions`), at the smaller
+    /// counter size; deterministic. The whole draw's: per-draw costs included.
     pub instructions: Option<u64>,
-    /// All instructions executed for the shaded draw, the driver's own work included.
+    /// All instructions executed for the shaded draw at the smaller counter size, the driver's
+    /// own work included.
     #[serde(default)]
     pub instructions_total: Option<u64>,
+    /// [`Run::instructions`] at the larger counter size.
+    #[serde(default)]
+    pub instructions_large: Option<u64>,
+    /// [`Run::instructions_total`] at the larger counter size.
+    #[serde(default)]
+    pub instructions_total_large: Option<u64>,
+    /// JIT instructions per shaded pixel: `(instructions_large − instructions)` over the
+    /// difference of the pixels the scene shades at the two sizes ([`Results::counter`]), so
+    /// the costs a draw pays whatever its size cancel. The figure to compare variants by.
+    #[serde(default)]
+    pub instructions_per_pixel: Option<f64>,
+    /// [`Run::instructions_per_pixel`] over that of the `ggx` baseline on the same material,
+    /// from the same run.
+    #[serde(default)]
+    pub instructions_per_pixel_ratio: Option<f64>,
     /// `VK_KHR_pipeline_executable_properties` statistics where offered; `null` otherwise.
     pub executable_stats: Option<serde_json::Value>,
 }
@@ -103,7 +124,31 @@ pub struct Results {
     pub command: String,
     pub size: [u32; 2],
     pub lp_num_threads: Option<String>,
+    /// What the shaded draw covers; results written before it was recorded shaded the sphere.
+    #[serde(default = "sphere")]
+    pub scene: Scene,
+    /// The instruction counter's sizes and shaded pixels; `null` when not counted.
+    #[serde(default)]
+    pub counter: Option<CounterInfo>,
     pub runs: Vec<Run>,
+}
+
+fn sphere() -> Scene {
+    Scene::Sphere
+}
+
+/// Where the instructions were counted: the two sizes (smaller first) and the pixels the scene
+/// shades at each ([`Scene::shaded_pixels`]; width × height for the full-screen scene).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CounterInfo {
+    pub sizes: [[u32; 2]; 2],
+    pub shaded_pixels: [u64; 2],
+}
+
+/// Puts `scene`'s mesh in front of `renderer`'s camera for a `width`×`height` frame.
+pub fn place_scene(renderer: &mut Renderer, scene: Scene, width: u32, height: u32) -> Result<()> {
+    let mesh = scene.mesh(&renderer.camera, width, height);
+    renderer.set_mesh(&mesh)
 }
 
 /// The `ggx` baseline every run is divided by.
@@ -138,6 +183,7 @@ pub fn run(
     let cases = config.with_baselines();
     let mut renderer = Renderer::new(gpu, equirect, EnvDesc::default())?;
     let layers: Vec<Vec<LayerParams>> = cases.iter().map(|c| c.stack.params()).collect();
+    place_scene(&mut renderer, config.scene, config.width, config.height)?;
     let mut passes: Vec<ForwardPass> = Vec::new();
     let mut pass_of = Vec::with_capacity(cases.len());
     for (case, stack) in cases.iter().zip(&layers) {
@@ -197,6 +243,8 @@ pub fn run(
         command: std::env::args().collect::<Vec<_>>().join(" "),
         size: [config.width, config.height],
         lp_num_threads: std::env::var("LP_NUM_THREADS").ok(),
+        scene: config.scene,
+        counter: None,
         runs: cases
             .iter()
             .zip(&pass_of)
@@ -217,6 +265,10 @@ pub fn run(
                 spirv_bytes: passes[p].spirv_bytes,
                 instructions: None,
                 instructions_total: None,
+                instructions_large: None,
+                instructions_total_large: None,
+                instructions_per_pixel: None,
+                instructions_per_pixel_ratio: None,
                 executable_stats: executable_stats[p].clone(),
             })
             .collect(),
@@ -224,16 +276,41 @@ pub fn run(
 }
 
 impl Results {
+    /// The `ggx` run on `material`: every other run's ratios divide by it.
+    pub fn baseline_of(&self, material: &str) -> Option<&Run> {
+        self.runs
+            .iter()
+            .find(|r| r.material == material && r.variant.starts_with("model=ggx"))
+    }
+
+    /// Sets every run's [`Run::instructions_per_pixel_ratio`] from the per-pixel counts.
+    pub fn set_per_pixel_ratios(&mut self) {
+        let ratios: Vec<Option<f64>> = self
+            .runs
+            .iter()
+            .map(|r| {
+                let base = self.baseline_of(&r.material)?.instructions_per_pixel?;
+                (base > 0.0).then_some(r.instructions_per_pixel? / base)
+            })
+            .collect();
+        for (run, ratio) in self.runs.iter_mut().zip(ratios) {
+            run.instructions_per_pixel_ratio = ratio;
+        }
+    }
+
     /// CSV with one row per run, the same fields as the JSON runs (variant keys quoted).
     pub fn csv(&self) -> String {
         let opt = |v: Option<u64>| v.map(|n| n.to_string()).unwrap_or_default();
+        let opt_f = |v: Option<f64>| v.map(|x| x.to_string()).unwrap_or_default();
         let mut out = String::from(
             "variant,material,frames,min_ms,median_ms,mean_ms,max_ms,stdev_ms,ratio_to_baseline,\
-             fragment_invocations,pipeline_ms,spirv_bytes,instructions,instructions_total\n",
+             fragment_invocations,pipeline_ms,spirv_bytes,instructions,instructions_total,\
+             instructions_large,instructions_total_large,instructions_per_pixel,\
+             instructions_per_pixel_ratio\n",
         );
         for r in &self.runs {
             out += &format!(
-                "\"{}\",\"{}\",{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                "\"{}\",\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 r.variant,
                 r.material.replace('"', "\"\""),
                 r.frames,
@@ -247,29 +324,42 @@ impl Results {
                 r.pipeline_ms,
                 r.spirv_bytes,
                 opt(r.instructions),
-                opt(r.instructions_total)
+                opt(r.instructions_total),
+                opt(r.instructions_large),
+                opt(r.instructions_total_large),
+                opt_f(r.instructions_per_pixel),
+                opt_f(r.instructions_per_pixel_ratio)
             );
         }
         out
     }
 
-    /// A table for the terminal.
+    /// A table for the terminal: the time, then (when counted) the JIT instructions per shaded
+    /// pixel and their ratio to ggx, then the whole draw's at the smaller counter size.
     pub fn table(&self) -> String {
         let mut out = format!(
-            "device: {} ({}), {}x{}, LP_NUM_THREADS={}, rev {}\n",
+            "device: {} ({}), {} scene, {}x{}, LP_NUM_THREADS={}, rev {}\n",
             self.device.name,
             self.device.driver,
+            self.scene,
             self.size[0],
             self.size[1],
             self.lp_num_threads.as_deref().unwrap_or("unset"),
             self.git_rev
         );
+        if let Some(c) = &self.counter {
+            out += &format!(
+                "instructions counted at {}x{} and {}x{} ({} and {} shaded pixels); per pixel: \
+                 the difference over the added pixels\n",
+                c.sizes[0][0],
+                c.sizes[0][1],
+                c.sizes[1][0],
+                c.sizes[1][1],
+                c.shaded_pixels[0],
+                c.shaded_pixels[1]
+            );
+        }
         let counted = self.runs.iter().any(|r| r.instructions.is_some());
-        let base_instructions = self
-            .runs
-            .iter()
-            .find(|r| r.variant.starts_with("model=ggx"))
-            .and_then(|r| r.instructions);
         out += &format!(
             "{:>9} {:>9} {:>9} {:>9} {:>8} {:>7} {:>9} {:>8}{}  variant | material\n",
             "min ms",
@@ -281,25 +371,32 @@ impl Results {
             "pipe ms",
             "SPIR-V",
             if counted {
-                format!(" {:>14} {:>7} {:>14}", "JIT instr.", "×ggx", "all instr.")
+                format!(
+                    " {:>10} {:>7} {:>14} {:>7} {:>14}",
+                    "JIT/pixel", "×ggx", "JIT instr.", "×ggx", "all instr."
+                )
             } else {
                 String::new()
             }
         );
+        let dash = || "–".to_string();
         for r in &self.runs {
-            let instructions = match (counted, r.instructions) {
-                (false, _) => String::new(),
-                (true, None) => format!(" {:>14} {:>7} {:>14}", "–", "–", "–"),
-                (true, Some(n)) => format!(
-                    " {:>14} {:>7} {:>14}",
-                    n,
-                    base_instructions
-                        .map(|b| format!("{:.2}", n as f64 / b as f64))
-                        .unwrap_or_else(|| "–".into()),
-                    r.instructions_total
-                        .map(|t| t.to_string())
-                        .unwrap_or_else(|| "–".into())
-                ),
+            let instructions = if counted {
+                let whole_ratio = self
+                    .baseline_of(&r.material)
+                    .and_then(|b| Some(r.instructions? as f64 / b.instructions? as f64));
+                format!(
+                    " {:>10} {:>7} {:>14} {:>7} {:>14}",
+                    r.instructions_per_pixel
+                        .map_or_else(dash, |n| format!("{n:.1}")),
+                    r.instructions_per_pixel_ratio
+                        .map_or_else(dash, |x| format!("{x:.2}")),
+                    r.instructions.map_or_else(dash, |n| n.to_string()),
+                    whole_ratio.map_or_else(dash, |x| format!("{x:.2}")),
+                    r.instructions_total.map_or_else(dash, |n| n.to_string())
+                )
+            } else {
+                String::new()
             };
             out += &format!(
                 "{:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>8.3} {:>7.2} {:>9.1} {:>8}{}  {} | {}\n",

@@ -8,21 +8,31 @@
 //! pipelines), renders each case once more to let llvmpipe JIT its fragment shader, then switches
 //! instrumentation on around the shaded draw's submission only and dumps the count under the
 //! case's name. The parent reads the dumps back.
+//!
+//! A draw's count carries costs that do not grow with the pixels it shades: vertex shading,
+//! triangle setup, the blocks a triangle edge crosses. The worker therefore draws every case at
+//! two sizes ([`CounterSizes`]), and [`add_counts`] divides the difference of the two counts by
+//! the difference of the shaded pixels: instructions per additional shaded pixel, in which the
+//! fixed costs cancel (profiling/README.md).
 
 use std::ffi::CString;
+use std::fmt;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
+use std::str::FromStr;
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
 use crate::material::Stack;
 use crate::render::forward::ForwardPass;
+use crate::render::scene::{Camera, Scene};
 use crate::render::{Renderer, ShadedPhase};
+use crate::size::Size;
 use crate::tables::environment::EnvDesc;
 
-use super::bench::{Case, Results};
+use super::bench::{place_scene, Case, CounterInfo, Results};
 use super::callgrind;
 
 /// The environment the worker prefilters: small, because the worker runs under valgrind and
@@ -34,18 +44,88 @@ pub const WORKER_ENV: EnvDesc = EnvDesc {
     samples: 16,
 };
 
-/// Prefix of the dump names, followed by the case's index.
+/// Prefix of the dump names, followed by `CASE-SIZE`: the indices of the case and of the size.
 const DUMP_PREFIX: &str = "lamina-case-";
 /// The line the worker prints on stderr after each case, read by the parent for progress.
 const PROGRESS_PREFIX: &str = "lamina-counted ";
 
-/// Runs in `lamina count-worker`.
+/// The two resolutions every case is counted at, the smaller first (`--counter-sizes
+/// 48x48,96x96`, `counter_sizes = ["48x48", "96x96"]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CounterSizes {
+    pub small: Size,
+    pub large: Size,
+}
+
+impl CounterSizes {
+    pub const DEFAULT: Self = Self {
+        small: Size {
+            width: 48,
+            height: 48,
+        },
+        large: Size {
+            width: 96,
+            height: 96,
+        },
+    };
+
+    /// Refuses a pair whose second size has no more pixels than the first: the per-pixel
+    /// count divides by the difference.
+    pub fn new(small: Size, large: Size) -> std::result::Result<Self, String> {
+        let (a, b) = (pixels(small), pixels(large));
+        if a == b {
+            return Err(format!(
+                "{small} and {large} both have {a} pixels; the per-pixel count divides by the \
+                 difference, give two sizes with different pixel counts"
+            ));
+        }
+        if b < a {
+            return Err(format!(
+                "{small} has more pixels than {large}; give the smaller size first"
+            ));
+        }
+        Ok(Self { small, large })
+    }
+
+    pub fn both(self) -> [Size; 2] {
+        [self.small, self.large]
+    }
+}
+
+fn pixels(size: Size) -> u64 {
+    u64::from(size.width) * u64::from(size.height)
+}
+
+impl FromStr for CounterSizes {
+    type Err = String;
+
+    /// `WxH,WxH`, the smaller first.
+    fn from_str(text: &str) -> std::result::Result<Self, String> {
+        let parts: Vec<&str> = text.split(',').collect();
+        let [small, large] = parts[..] else {
+            return Err(format!(
+                "`{text}` is not two sizes SMALL,LARGE, e.g. 48x48,96x96"
+            ));
+        };
+        let parse = |part: &str| part.trim().parse::<Size>().map_err(|e| e.to_string());
+        Self::new(parse(small)?, parse(large)?)
+    }
+}
+
+impl fmt::Display for CounterSizes {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{},{}", self.small, self.large)
+    }
+}
+
+/// Runs in `lamina count-worker`: every case drawn and counted at each of `sizes`, in that
+/// order, with `scene`'s mesh.
 pub fn worker(
     gpu: &Gpu,
     equirect: &HdrImage,
     cases: &[Case],
-    width: u32,
-    height: u32,
+    scene: Scene,
+    sizes: &[Size],
 ) -> Result<()> {
     if !callgrind::running() {
         return Err(Error::Unsupported(
@@ -62,21 +142,25 @@ pub fn worker(
             passes.push(renderer.prepare(case.variant, &layers)?);
         }
     }
-    for (i, case) in cases.iter().enumerate() {
-        let layers = case.stack.params();
-        let pass = passes
-            .iter()
-            .find(|p| p.shades(case.variant, &layers))
-            .expect("prepared above");
-        // llvmpipe compiles a fragment-shader variant at its first draw: keep that out.
-        renderer.render(pass, &layers, width, height)?;
-        renderer.render_observed(pass, &layers, width, height, &mut |phase| match phase {
-            ShadedPhase::Before => callgrind::start_instrumentation(),
-            ShadedPhase::After => callgrind::stop_instrumentation(),
-        })?;
-        let name = CString::new(format!("{DUMP_PREFIX}{i}")).expect("no NUL in a number");
-        callgrind::dump_stats_at(&name);
-        eprintln!("{PROGRESS_PREFIX}{}/{}", i + 1, cases.len());
+    let total = cases.len() * sizes.len();
+    for (k, &Size { width, height }) in sizes.iter().enumerate() {
+        place_scene(&mut renderer, scene, width, height)?;
+        for (i, case) in cases.iter().enumerate() {
+            let layers = case.stack.params();
+            let pass = passes
+                .iter()
+                .find(|p| p.shades(case.variant, &layers))
+                .expect("prepared above");
+            // llvmpipe compiles a fragment-shader variant at its first draw: keep that out.
+            renderer.render(pass, &layers, width, height)?;
+            renderer.render_observed(pass, &layers, width, height, &mut |phase| match phase {
+                ShadedPhase::Before => callgrind::start_instrumentation(),
+                ShadedPhase::After => callgrind::stop_instrumentation(),
+            })?;
+            let name = CString::new(format!("{DUMP_PREFIX}{i}-{k}")).expect("no NUL in a number");
+            callgrind::dump_stats_at(&name);
+            eprintln!("{PROGRESS_PREFIX}{}/{total}", k * cases.len() + i + 1);
+        }
     }
     Ok(())
 }
@@ -115,32 +199,61 @@ impl CounterSetup {
     }
 }
 
-/// Counts the instructions of each case's shaded draw at `width`×`height` and stores them in
-/// `results`, whose runs are `cases` in order (a bench run of [`BenchConfig::with_baselines`]).
+/// Counts the instructions of each case's shaded draw at both `sizes` and stores them in
+/// `results`, whose runs are `cases` in order (a bench run of [`BenchConfig::with_baselines`]),
+/// with `results.scene`'s mesh: the whole-draw counts at each size, the JIT instructions per
+/// shaded pixel (the difference of the two counts over the difference of the pixels the scene
+/// shades, [`Scene::shaded_pixels`]) and their ratio to the `ggx` baseline of the same material.
 ///
 /// [`BenchConfig::with_baselines`]: super::bench::BenchConfig::with_baselines
 pub fn add_counts(
     results: &mut Results,
     setup: &CounterSetup,
     cases: &[Case],
-    (width, height): (u32, u32),
+    sizes: CounterSizes,
     progress: impl FnMut(usize, usize),
 ) -> Result<()> {
+    let scene = results.scene;
+    // The renderers of the bench and of the worker look through the default camera.
+    let camera = Camera::default();
+    let shaded_pixels = sizes
+        .both()
+        .map(|s| scene.shaded_pixels(&camera, s.width, s.height));
+    let [small_pixels, large_pixels] = shaded_pixels;
+    if large_pixels <= small_pixels {
+        return Err(Error::Unsupported(format!(
+            "the {scene} scene shades {small_pixels} pixels at {} and {large_pixels} at {}: no \
+             per-pixel difference to count; give a larger second counter size",
+            sizes.small, sizes.large
+        )));
+    }
     let counts = count_instructions(
         &CountRequest {
             exe: &setup.exe,
             global_args: setup.global_args.clone(),
             env_map: &setup.env_map,
             cases,
-            width,
-            height,
+            scene,
+            sizes: &sizes.both(),
         },
         progress,
     )?;
+    let added_pixels = (large_pixels - small_pixels) as f64;
     for (run, count) in results.runs.iter_mut().zip(counts) {
-        run.instructions = Some(count.jit);
-        run.instructions_total = Some(count.total);
+        let [small, large] = count[..] else {
+            unreachable!("count_instructions answers one count per size");
+        };
+        run.instructions = Some(small.jit);
+        run.instructions_total = Some(small.total);
+        run.instructions_large = Some(large.jit);
+        run.instructions_total_large = Some(large.total);
+        run.instructions_per_pixel = Some((large.jit as f64 - small.jit as f64) / added_pixels);
     }
+    results.counter = Some(CounterInfo {
+        sizes: sizes.both().map(|s| [s.width, s.height]),
+        shaded_pixels,
+    });
+    results.set_per_pixel_ratios();
     Ok(())
 }
 
@@ -152,16 +265,18 @@ pub struct CountRequest<'a> {
     pub global_args: Vec<String>,
     pub env_map: &'a Path,
     pub cases: &'a [Case],
-    pub width: u32,
-    pub height: u32,
+    pub scene: Scene,
+    /// The resolutions each case is drawn and counted at, in order.
+    pub sizes: &'a [Size],
 }
 
-/// Counts the instructions of each case's shaded draw; `progress(done, total)` follows the
-/// worker. Every case gets a count or the whole call fails.
+/// Counts the instructions of each case's shaded draw at each size: `counts[case][size]`;
+/// `progress(done, total)` follows the worker. Every case gets a count at every size or the
+/// whole call fails.
 pub fn count_instructions(
     request: &CountRequest<'_>,
     mut progress: impl FnMut(usize, usize),
-) -> Result<Vec<Counts>> {
+) -> Result<Vec<Vec<Counts>>> {
     let dir = scratch_dir()?;
     let result = run_worker(request, &dir, &mut progress);
     // The dumps are read (or the run failed); nothing in the directory is kept.
@@ -192,7 +307,7 @@ fn run_worker(
     request: &CountRequest<'_>,
     dir: &Path,
     progress: &mut dyn FnMut(usize, usize),
-) -> Result<Vec<Counts>> {
+) -> Result<Vec<Vec<Counts>>> {
     let stacks = write_job(dir, request.cases)?;
     let out_file = dir.join("callgrind.out");
     let mut command = Command::new("valgrind");
@@ -208,8 +323,14 @@ fn run_worker(
         .arg(&stacks)
         .arg("--env")
         .arg(request.env_map)
-        .arg("--size")
-        .arg(format!("{}x{}", request.width, request.height))
+        .arg("--scene")
+        .arg(request.scene.name())
+        .args(
+            request
+                .sizes
+                .iter()
+                .flat_map(|s| ["--size".to_string(), s.to_string()]),
+        )
         .env("LP_NUM_THREADS", "0")
         .stdout(Stdio::null())
         .stderr(Stdio::piped());
@@ -225,7 +346,7 @@ fn run_worker(
         }
     })?;
     let mut tail: Vec<String> = Vec::new();
-    let total = request.cases.len();
+    let total = request.cases.len() * request.sizes.len();
     progress(0, total);
     if let Some(stderr) = child.stderr.take() {
         for line in BufReader::new(stderr).lines().map_while(|l| l.ok()) {
@@ -252,7 +373,7 @@ fn run_worker(
             tail.join("\n")
         )));
     }
-    let mut counts = vec![None; total];
+    let mut counts = vec![vec![None; request.sizes.len()]; request.cases.len()];
     for entry in std::fs::read_dir(dir).map_err(|e| io_error(dir, e))? {
         let path = entry.map_err(|e| io_error(dir, e))?.path();
         let is_dump = path
@@ -263,8 +384,8 @@ fn run_worker(
             continue;
         }
         let text = std::fs::read_to_string(&path).map_err(|e| io_error(&path, e))?;
-        if let Some((index, count)) = parse_dump(&text) {
-            if let Some(slot) = counts.get_mut(index) {
+        if let Some(((case, size), count)) = parse_dump(&text) {
+            if let Some(slot) = counts.get_mut(case).and_then(|c| c.get_mut(size)) {
                 *slot = Some(count);
             }
         }
@@ -272,14 +393,22 @@ fn run_worker(
     counts
         .into_iter()
         .enumerate()
-        .map(|(i, c)| {
-            c.ok_or_else(|| {
-                Error::Unsupported(format!(
-                    "callgrind wrote no count for case {i} ({}); worker messages:\n{}",
-                    request.cases[i].variant,
-                    tail.join("\n")
-                ))
-            })
+        .map(|(i, by_size)| {
+            by_size
+                .into_iter()
+                .enumerate()
+                .map(|(k, c)| {
+                    c.ok_or_else(|| {
+                        Error::Unsupported(format!(
+                            "callgrind wrote no count for case {i} ({}) at {}; worker \
+                             messages:\n{}",
+                            request.cases[i].variant,
+                            request.sizes[k],
+                            tail.join("\n")
+                        ))
+                    })
+                })
+                .collect()
         })
         .collect()
 }
@@ -301,12 +430,12 @@ pub struct Counts {
     pub jit: u64,
 }
 
-/// The case index and counts of one callgrind dump, when it is one of ours.
+/// The case and size indices and the counts of one callgrind dump, when it is one of ours.
 ///
 /// Self costs are summed per object (`ob=`): every cost line adds its last number (the `Ir`
 /// event) to the current object, except the line after `calls=`, which carries the call's
 /// inclusive cost. Objects are named on first use (`ob=(3) /path`) and by number after.
-fn parse_dump(text: &str) -> Option<(usize, Counts)> {
+fn parse_dump(text: &str) -> Option<((usize, usize), Counts)> {
     let mut index = None;
     let mut names: std::collections::HashMap<&str, &str> = std::collections::HashMap::new();
     let mut current = "";
@@ -318,7 +447,8 @@ fn parse_dump(text: &str) -> Option<(usize, Counts)> {
             continue;
         }
         if let Some(desc) = line.strip_prefix("desc: Trigger: Client Request: ") {
-            index = desc.trim().strip_prefix(DUMP_PREFIX)?.parse().ok();
+            let (case, size) = desc.trim().strip_prefix(DUMP_PREFIX)?.split_once('-')?;
+            index = Some((case.parse().ok()?, size.parse().ok()?));
         } else if let Some(spec) = line
             .strip_prefix("ob=")
             .or_else(|| line.strip_prefix("cob="))
@@ -406,16 +536,41 @@ mod tests {
     use super::*;
 
     #[test]
+    fn counter_sizes_parse_and_bad_pairs_are_named() {
+        let sizes: CounterSizes = "48x48, 96x96".parse().unwrap();
+        assert_eq!(sizes, CounterSizes::DEFAULT);
+        assert_eq!(sizes.to_string(), "48x48,96x96");
+        assert_eq!(
+            "16x16,32x9".parse::<CounterSizes>().unwrap().large.height,
+            9
+        );
+        for (text, words) in [
+            ("48x48,48x48", vec!["2304 pixels", "different pixel counts"]),
+            ("32x64,64x32", vec!["both have 2048 pixels"]),
+            ("96x96,48x48", vec!["smaller size first"]),
+            ("48x48", vec!["SMALL,LARGE", "`48x48`"]),
+            ("16x16,32x32,64x64", vec!["SMALL,LARGE"]),
+            ("0x16,32x32", vec!["width", "1..=16384"]),
+            ("16x16,32x99999", vec!["height", "1..=16384"]),
+        ] {
+            let e = text.parse::<CounterSizes>().unwrap_err();
+            for w in words {
+                assert!(e.contains(w), "{text}: `{w}` missing from {e}");
+            }
+        }
+    }
+
+    #[test]
     fn a_dump_splits_jit_code_from_the_rest() {
         let text = "version: 1\ncreator: callgrind-3.19.0\npart: 2\n\
-                    desc: Trigger: Client Request: lamina-case-3\n\
+                    desc: Trigger: Client Request: lamina-case-3-1\n\
                     positions: line\nevents: Ir\nsummary: 0\n\n\
                     ob=(1) /usr/lib/libvulkan_lvp.so\nfl=(1) ???\nfn=(1) 0x10\n0 100\n\
                     cob=(2) ???\ncfn=(2) 0x20\ncalls=1 0\n0 5000\n+2 7\n\
                     ob=(2)\nfn=(2)\n0 40\n* 2\n\
                     ob=(1)\nfn=(3) 0x30\n-1 3\n";
         let (index, counts) = parse_dump(text).unwrap();
-        assert_eq!(index, 3);
+        assert_eq!(index, (3, 1));
         assert_eq!(
             counts,
             Counts {

@@ -2,8 +2,9 @@
 //! devices. Runs pair by (variant, material). Times are compared as ratios to each run's own
 //! `ggx` baseline (milliseconds of different machines or runs do not compare; the ratio within
 //! one run does), JIT instruction counts as they are (deterministic: any change is a change of
-//! the code that ran). `--fail-above PCT` turns an instruction-count growth — or a run or study
-//! it cannot check — into an error, for CI.
+//! the code that ran): per shaded pixel where both sides have that figure, and the whole draw's.
+//! `--fail-above PCT` turns a growth of the whole draw's count — or a run or study it cannot
+//! check — into an error, for CI.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -75,6 +76,13 @@ impl Change<'_> {
     pub fn instructions(&self) -> Option<f64> {
         let old = self.old.instructions.filter(|&n| n > 0)?;
         Some(self.new.instructions? as f64 / old as f64)
+    }
+
+    /// New JIT instructions per shaded pixel over the old ones, when both sides have them and
+    /// the old figure is positive.
+    pub fn instructions_per_pixel(&self) -> Option<f64> {
+        let old = self.old.instructions_per_pixel.filter(|&n| n > 0.0)?;
+        Some(self.new.instructions_per_pixel? / old)
     }
 }
 
@@ -197,29 +205,46 @@ pub fn render(cmp: &Comparison) -> String {
         }
         let _ = writeln!(
             out,
-            "old: {} (rev {}, {}x{})\nnew: {} (rev {}, {}x{})",
+            "old: {} (rev {}, {}x{} {})\nnew: {} (rev {}, {}x{} {})",
             o.device.name,
             o.git_rev,
             o.size[0],
             o.size[1],
+            o.scene,
             n.device.name,
             n.git_rev,
             n.size[0],
-            n.size[1]
+            n.size[1],
+            n.scene
         );
         let _ = writeln!(
             out,
-            "{:>8} {:>8} {:>9}  {:>14} {:>14} {:>9}  variant | material",
-            "old ×ggx", "new ×ggx", "Δ time", "old JIT instr.", "new JIT instr.", "Δ instr."
+            "{:>8} {:>8} {:>9}  {:>10} {:>10} {:>9}  {:>14} {:>14} {:>9}  variant | material",
+            "old ×ggx",
+            "new ×ggx",
+            "Δ time",
+            "old JIT/px",
+            "new JIT/px",
+            "Δ /px",
+            "old JIT instr.",
+            "new JIT instr.",
+            "Δ instr."
         );
         for c in &d.changes {
             let count = |r: &Run| r.instructions.map_or("–".into(), |n| n.to_string());
+            let per_pixel = |r: &Run| {
+                r.instructions_per_pixel
+                    .map_or("–".into(), |n| format!("{n:.1}"))
+            };
             let _ = writeln!(
                 out,
-                "{:>8.2} {:>8.2} {:>9}  {:>14} {:>14} {:>9}  {} | {}",
+                "{:>8.2} {:>8.2} {:>9}  {:>10} {:>10} {:>9}  {:>14} {:>14} {:>9}  {} | {}",
                 c.old.ratio_to_baseline,
                 c.new.ratio_to_baseline,
                 ratio(c.time()),
+                per_pixel(c.old),
+                per_pixel(c.new),
+                ratio(c.instructions_per_pixel()),
                 count(c.old),
                 count(c.new),
                 ratio(c.instructions()),
@@ -305,6 +330,10 @@ mod tests {
             spirv_bytes: 0,
             instructions: jit,
             instructions_total: None,
+            instructions_large: None,
+            instructions_total_large: None,
+            instructions_per_pixel: jit.map(|n| n as f64 / 1000.0),
+            instructions_per_pixel_ratio: None,
             executable_stats: None,
         }
     }
@@ -324,6 +353,8 @@ mod tests {
                 command: String::new(),
                 size: [8, 8],
                 lp_num_threads: None,
+                scene: crate::render::scene::Scene::FullScreen,
+                counter: None,
                 runs,
             },
         }
@@ -360,6 +391,12 @@ mod tests {
         let text = render(&cmp);
         assert!(text.contains("-50.0 %"), "{text}");
         assert!(text.contains("+5.0 %"), "{text}");
+        // Per pixel: 30000.0 → 15000.0 for tm6, 3000.0 → 3150.0 for tm2.
+        assert!(text.contains("30000.0    15000.0"), "{text}");
+        assert!(
+            (d.changes[1].instructions_per_pixel().unwrap() - 1.05).abs() < 1e-12,
+            "{text}"
+        );
         assert!(
             text.contains("only in old: model=tm2,max_layers=2 | copper"),
             "{text}"

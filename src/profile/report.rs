@@ -3,6 +3,10 @@
 //! different machines do not compare; ratios within one run do), and a reading of them: which
 //! figures agree, and the device effects the data itself shows (lavapipe's draw-time shader
 //! rebuild, its fp16 emulation).
+//!
+//! Instruction counts are compared per shaded pixel (the marginal count between the two
+//! counter sizes, free of per-draw costs) where a study has them; the whole draw's count is the
+//! secondary column, and the only one of studies counted at a single size.
 
 use std::fmt::Write as _;
 use std::path::{Component, Path, PathBuf};
@@ -143,6 +147,35 @@ fn instructions_ratio(run: &Run, base: Option<&Run>) -> Option<f64> {
     Some(run.instructions? as f64 / base?.instructions? as f64)
 }
 
+fn fmt_per_pixel(n: Option<f64>) -> String {
+    n.map(|n| format!("{n:.1}")).unwrap_or_else(|| "–".into())
+}
+
+/// Whether the study's runs carry instructions per shaded pixel (counted at two sizes).
+fn per_pixel(r: &Results) -> bool {
+    r.runs
+        .iter()
+        .any(|run| run.instructions_per_pixel.is_some())
+}
+
+/// `a`'s JIT instructions over `b`'s: per shaded pixel when both have that figure, else the
+/// whole draws' counts.
+fn jit_ratio(a: &Run, b: &Run) -> Option<f64> {
+    match (a.instructions_per_pixel, b.instructions_per_pixel) {
+        (Some(x), Some(y)) if y > 0.0 => Some(x / y),
+        _ => Some(a.instructions? as f64 / b.instructions? as f64),
+    }
+}
+
+/// How [`jit_ratio`] compared the study's runs, for prose.
+fn jit_basis(r: &Results) -> &'static str {
+    if per_pixel(r) {
+        "JIT instructions per pixel"
+    } else {
+        "JIT instructions"
+    }
+}
+
 /// Collects the studies under `roots` ([`collect`]) and writes their report to `out`
 /// atomically; returns how many studies it holds.
 pub fn write(roots: &[PathBuf], out: &Path) -> Result<usize> {
@@ -161,8 +194,11 @@ pub fn render(studies: &[StudyDir], out: &Path) -> String {
            pipelines are built up front, frames interleave the variants round-robin, warm-up frames \
            are dropped, the shaded draw is timed by timestamps (median of the measured frames) and, \
            where counted, its instructions are counted under callgrind (lavapipe, \
-           `LP_NUM_THREADS=0`, deterministic). Ratios divide by the `ggx` baseline, or by the \
-           first published figure's run, measured in the same run.\n\n";
+           `LP_NUM_THREADS=0`, deterministic) at two sizes: the main figure is the instructions per \
+           shaded pixel (the difference of the two counts over the added pixels, so what a draw \
+           costs whatever its size cancels), the whole draw's count at the smaller size is \
+           secondary. Ratios divide by the `ggx` baseline, or by the first published figure's \
+           run, measured in the same run.\n\n";
     md += "On lavapipe the \"GPU\" is the CPU: timestamps are wall-clock time of llvmpipe's JIT \
            code (noisy, up to 2× between runs), and fp16 is emulated (it costs more, where a GPU \
            saves registers). The talk's figures come from an RX 6700 XT (D3D12, RGP); compare \
@@ -201,7 +237,8 @@ fn summary_section(md: &mut String, studies: &[StudyDir]) {
         md,
         "## Summary: ours against the talk\n\n\
          Ratios to each study's first published figure (agreeing: within {:.0} % of the \
-         talk's).\n",
+         talk's); JIT instructions per shaded pixel where the study counted two sizes, else of \
+         the whole draw.\n",
         AGREEMENT * 100.0
     );
     let _ = writeln!(
@@ -250,14 +287,25 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
     }
     let _ = writeln!(
         md,
-        "Device: **{}** ({}, Vulkan {}); {}x{}, {} measured frames per variant; \
+        "Device: **{}** ({}, Vulkan {}); {} scene, {}x{}, {} measured frames per variant{}; \
          LP_NUM_THREADS={}; rev `{}`; sweep `{}`; results `{}`.\n",
         r.device.name,
         r.device.driver,
         r.device.api_version,
+        r.scene,
         r.size[0],
         r.size[1],
         r.runs.first().map_or(0, |run| run.frames),
+        r.counter
+            .as_ref()
+            .map(|c| {
+                let [[a, b], [w, h]] = c.sizes;
+                format!(
+                    "; instructions counted at {a}x{b} and {w}x{h} ({} and {} shaded pixels)",
+                    c.shaded_pixels[0], c.shaded_pixels[1]
+                )
+            })
+            .unwrap_or_default(),
         r.lp_num_threads.as_deref().unwrap_or("unset"),
         r.git_rev,
         m.sweep_file,
@@ -269,6 +317,7 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
         .iter()
         .find(|run| run.variant.starts_with("model=ggx"));
     let counted = r.runs.iter().any(|run| run.instructions.is_some());
+    let per_pixel = per_pixel(r);
     let header_axes = if m.axes.is_empty() {
         "variant".to_string()
     } else {
@@ -276,14 +325,20 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
     };
     let _ = writeln!(
         md,
-        "| {header_axes} | material | median ms | min–max ms | ×ggx (time) |{}",
+        "| {header_axes} | material | median ms | min–max ms | ×ggx (time) |{}{}",
+        if per_pixel {
+            " JIT instr. per pixel | ×ggx (per pixel) |"
+        } else {
+            ""
+        },
         if counted {
             " JIT instructions | ×ggx (JIT instr.) | all instructions |"
         } else {
             ""
         }
     );
-    let columns = m.axes.len().max(1) + 4 + if counted { 3 } else { 0 };
+    let columns =
+        m.axes.len().max(1) + 4 + if per_pixel { 2 } else { 0 } + if counted { 3 } else { 0 };
     let _ = writeln!(md, "|{}", "---|".repeat(columns));
     let mut rows: Vec<(Vec<String>, &Run)> = Vec::new();
     if let Some(b) = base {
@@ -310,6 +365,14 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
             run.max_ms,
             run.ratio_to_baseline
         );
+        if per_pixel {
+            let _ = write!(
+                md,
+                " {} | {} |",
+                fmt_per_pixel(run.instructions_per_pixel),
+                fmt_ratio(run.instructions_per_pixel_ratio)
+            );
+        }
         if counted {
             let _ = write!(
                 md,
@@ -398,8 +461,7 @@ fn comparisons(s: &StudyDir) -> Vec<Comparison<'_>> {
                 run,
                 talk: figure.ms / reference.ms,
                 time: pair.map(|(a, b)| a.median_ms / b.median_ms),
-                instructions: pair
-                    .and_then(|(a, b)| Some(a.instructions? as f64 / b.instructions? as f64)),
+                instructions: pair.and_then(|(a, b)| jit_ratio(a, b)),
             }
         })
         .collect()
@@ -413,7 +475,8 @@ fn published_section(md: &mut String, s: &StudyDir) {
     );
     let _ = writeln!(
         md,
-        "| figure | talk ms | talk ratio | our run | ours, time ratio | ours, instructions ratio |"
+        "| figure | talk ms | talk ratio | our run | ours, time ratio | ours, {} ratio |",
+        jit_basis(&s.results)
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|");
     for c in comparisons(s) {
@@ -476,7 +539,8 @@ fn reading(s: &StudyDir) -> Vec<String> {
         if c.instructions.is_some() {
             let _ = write!(
                 line,
-                ", by JIT instructions {}",
+                ", by {} {}",
+                jit_basis(r),
                 verdict(c.instructions, c.talk)
             );
         }
@@ -545,9 +609,7 @@ fn reading(s: &StudyDir) -> Vec<String> {
                 continue;
             };
             time.push(on.median_ms / off.median_ms);
-            if let (Some(a), Some(b)) = (on.instructions, off.instructions) {
-                instr.push(a as f64 / b as f64);
-            }
+            instr.extend(jit_ratio(on, off));
         }
         if !time.is_empty() {
             let range = |v: &[f64]| {
@@ -566,7 +628,7 @@ fn reading(s: &StudyDir) -> Vec<String> {
                 range(&time)
             );
             if !instr.is_empty() {
-                let _ = write!(line, ", {} in JIT instructions", range(&instr));
+                let _ = write!(line, ", {} in {}", range(&instr), jit_basis(r));
             }
             line += "; a GPU with native half floats saves registers and scratch with it instead.";
             lines.push(line);
@@ -591,7 +653,9 @@ fn fit_section(md: &mut String, s: &StudyDir) {
     let Some(x_axis) = m.axes.first() else {
         return;
     };
-    // Per series label: (x, median ms, instructions) points.
+    // Per series label: (x, median ms, instructions) points; instructions per shaded pixel
+    // where counted at two sizes, else the whole draw's.
+    let per_pixel = per_pixel(r);
     type FitPoint = (f64, f64, Option<f64>);
     let mut series: Vec<(String, Vec<FitPoint>)> = Vec::new();
     for p in &m.points {
@@ -600,7 +664,12 @@ fn fit_section(md: &mut String, s: &StudyDir) {
         };
         let label = p.coords[1..].join(", ");
         let run = &r.runs[p.run];
-        let point = (x, run.median_ms, run.instructions.map(|n| n as f64));
+        let instructions = if per_pixel {
+            run.instructions_per_pixel
+        } else {
+            run.instructions.map(|n| n as f64)
+        };
+        let point = (x, run.median_ms, instructions);
         match series.iter_mut().find(|(l, _)| *l == label) {
             Some((_, points)) => points.push(point),
             None => series.push((label, vec![point])),
@@ -609,9 +678,21 @@ fn fit_section(md: &mut String, s: &StudyDir) {
     let _ = writeln!(md, "Least-squares line along `{x_axis}` (y = a + b·x):\n");
     let _ = writeln!(
         md,
-        "| series | time: b (ms per step) | a (ms) | R² | instructions: b per step | R² |"
+        "| series | time: b (ms per step) | a (ms) | R² | {}: b per step | R² |",
+        if per_pixel {
+            "instructions per pixel"
+        } else {
+            "instructions"
+        }
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|");
+    let slope = |b: f64| {
+        if per_pixel {
+            format!("{b:.2}")
+        } else {
+            format!("{:.3} M", b / 1e6)
+        }
+    };
     for (label, points) in &series {
         let time: Vec<(f64, f64)> = points.iter().map(|p| (p.0, p.1)).collect();
         let instr: Vec<(f64, f64)> = points.iter().filter_map(|p| Some((p.0, p.2?))).collect();
@@ -624,7 +705,7 @@ fn fit_section(md: &mut String, s: &StudyDir) {
             t.map_or("–".into(), |f| format!("{:.4}", f.1)),
             t.map_or("–".into(), |f| format!("{:.4}", f.0)),
             t.map_or("–".into(), |f| format!("{:.4}", f.2)),
-            i.map_or("–".into(), |f| format!("{:.3} M", f.1 / 1e6)),
+            i.map_or("–".into(), |f| slope(f.1)),
             i.map_or("–".into(), |f| format!("{:.5}", f.2)),
         );
     }
@@ -661,6 +742,10 @@ mod tests {
             spirv_bytes: 0,
             instructions: Some(jit),
             instructions_total: Some(total),
+            instructions_large: None,
+            instructions_total_large: None,
+            instructions_per_pixel: None,
+            instructions_per_pixel_ratio: None,
             executable_stats: None,
         }
     }
@@ -691,6 +776,8 @@ mod tests {
                 command: "c".into(),
                 size: [8, 8],
                 lp_num_threads: Some("0".into()),
+                scene: crate::render::scene::Scene::Sphere,
+                counter: None,
                 runs: vec![
                     run(&key("model=ggx"), 1.0, 2_000_000, 8_000_000),
                     // 34 M outside the JIT code against the baseline's 6 M: rebuilt.
@@ -720,6 +807,7 @@ mod tests {
                 ],
                 fit: false,
                 counter_size: None,
+                counter_sizes: None,
             },
         };
         let lines = reading(&study);
@@ -760,6 +848,82 @@ mod tests {
             "{md}"
         );
         assert!(md.contains("- wide array against 2-flux"), "{md}");
+    }
+
+    #[test]
+    fn per_pixel_counts_are_the_main_figure() {
+        let key = |k: &str| k.parse::<VariantKey>().unwrap().to_string();
+        let counted = |variant: &str, jit: u64, per_pixel: f64, ratio: f64| Run {
+            instructions_large: Some(jit * 3),
+            instructions_total_large: Some(jit * 4),
+            instructions_per_pixel: Some(per_pixel),
+            instructions_per_pixel_ratio: Some(ratio),
+            ..run(&key(variant), 1.0, jit, jit * 2)
+        };
+        let study = StudyDir {
+            dir: PathBuf::from("x"),
+            results: Results {
+                device: super::super::bench::DeviceInfo {
+                    name: "llvmpipe".into(),
+                    driver: "llvmpipe Mesa".into(),
+                    api_version: "1.3".into(),
+                    vendor_id: 0x10005,
+                },
+                git_rev: "0".into(),
+                command: "c".into(),
+                size: [8, 8],
+                lp_num_threads: Some("0".into()),
+                scene: crate::render::scene::Scene::FullScreen,
+                counter: Some(super::super::bench::CounterInfo {
+                    sizes: [[48, 48], [96, 96]],
+                    shaded_pixels: [2304, 9216],
+                }),
+                runs: vec![
+                    counted("model=ggx", 1_000_000, 300.0, 1.0),
+                    counted("model=tm2,max_layers=4", 5_000_000, 2400.0, 8.0),
+                ],
+            },
+            meta: StudyMeta {
+                name: "n".into(),
+                title: "t".into(),
+                description: String::new(),
+                sweep_file: "s".into(),
+                axes: vec!["model".into()],
+                points: vec![super::super::sweep::PointMeta {
+                    run: 1,
+                    coords: vec!["tm2".into()],
+                }],
+                skipped: Vec::new(),
+                published: vec![
+                    published("ggx", "model=ggx", 1.0),
+                    published("2-flux", "model=tm2", 8.0),
+                ],
+                fit: false,
+                counter_size: Some([48, 48]),
+                counter_sizes: Some([[48, 48], [96, 96]]),
+            },
+        };
+        let md = render(std::slice::from_ref(&study), Path::new("REPORT.md"));
+        assert!(
+            md.contains("fullscreen scene, 8x8") && md.contains("at 48x48 and 96x96"),
+            "{md}"
+        );
+        assert!(
+            md.contains(
+                "| model | material | median ms | min–max ms | ×ggx (time) | JIT instr. per \
+                 pixel | ×ggx (per pixel) | JIT instructions | ×ggx (JIT instr.) | all \
+                 instructions |"
+            ),
+            "{md}"
+        );
+        assert!(
+            md.contains("| tm2 | gold | 1.000 | 1.000–1.000 | 1.00× | 2400.0 | 8.00× | 5.000 M | 5.00× | 10.000 M |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("2-flux against ggx: the talk 8.00×; ours by time 1.00×, 0.12× the talk's, by JIT instructions per pixel 8.00×, agrees."),
+            "{md}"
+        );
     }
 
     #[test]

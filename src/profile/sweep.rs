@@ -8,11 +8,12 @@
 //! description = "…"                   # one paragraph, copied into the report
 //! materials = ["varnished-gold"]      # presets or files (relative to this file)
 //! base = "model=tm2"                  # variant axes every case starts from
+//! scene = "fullscreen"                # what the draw shades: fullscreen (default) or sphere
 //! size = "320x180"
 //! frames = 10
 //! warmup = 2
 //! counter = "instructions"            # optional: also count instructions under callgrind
-//! counter_size = "48x48"              # resolution of the counted draw
+//! counter_sizes = ["48x48", "96x96"]  # the two counted resolutions (per pixel: the difference)
 //! fit = "linear"                      # optional: report a least-squares line along axis 1
 //! [[axis]]                            # cartesian product, first axis on the charts' x axis
 //! name = "max_layers"
@@ -38,14 +39,15 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::imageio::write_file_atomically;
 use crate::material::Stack;
+use crate::render::scene::Scene;
 use crate::size::Size;
 use crate::variant::{VariantKey, AXES};
 
 use super::bench::Case;
-use super::counter::CounterSetup;
+use super::counter::{CounterSetup, CounterSizes};
 
-/// Resolution of the counted draw when instructions are counted without a `counter_size`.
-pub const DEFAULT_COUNTER_SIZE: (u32, u32) = (48, 48);
+/// What a study shades when its file names no `scene`: every pixel, as the talk measured.
+pub const DEFAULT_SCENE: Scene = Scene::FullScreen;
 /// The pseudo-axes a sweep adds to the variant axes: `variant` takes key fragments
 /// (`"mode=generic,max_layers=4"`), for studies whose variants are not a product of axes.
 pub const EXTRA_AXES: [&str; 3] = ["active_layers", "material", "variant"];
@@ -56,16 +58,19 @@ pub struct SweepFile {
     pub name: Option<String>,
     pub title: Option<String>,
     pub description: Option<String>,
-    /// A suite: sweep files (relative to this one) run in order, with this file's `size`,
-    /// `frames`, `warmup`, `counter` and `counter_size` overriding theirs.
+    /// A suite: sweep files (relative to this one) run in order, with this file's `scene`,
+    /// `size`, `frames`, `warmup`, `counter` and `counter_sizes` overriding theirs.
     pub studies: Option<Vec<String>>,
     pub materials: Option<Vec<String>>,
     pub base: Option<String>,
+    pub scene: Option<String>,
     pub size: Option<String>,
     pub frames: Option<u32>,
     pub warmup: Option<u32>,
     pub counter: Option<String>,
-    pub counter_size: Option<String>,
+    pub counter_sizes: Option<Vec<String>>,
+    /// Replaced by `counter_sizes`; read only to say so.
+    pub counter_size: Option<toml::Value>,
     pub fit: Option<String>,
     #[serde(default, rename = "axis")]
     pub axes: Vec<AxisSpec>,
@@ -101,12 +106,13 @@ pub struct Study {
     pub description: String,
     pub file: PathBuf,
     pub source_text: String,
+    pub scene: Scene,
     pub width: u32,
     pub height: u32,
     pub frames: u32,
     pub warmup: u32,
-    /// Resolution of the counted draw when instruction counting is on.
-    pub counter: Option<(u32, u32)>,
+    /// The counted resolutions when instruction counting is on.
+    pub counter: Option<CounterSizes>,
     pub axes: Vec<String>,
     pub points: Vec<Point>,
     /// Combinations left out because the stack does not fit the variant's `max_layers`.
@@ -116,10 +122,10 @@ pub struct Study {
 }
 
 impl Study {
-    /// Counts instructions too (`--counter instructions`): at the study's own counter size
-    /// when it counts already, else at [`DEFAULT_COUNTER_SIZE`].
+    /// Counts instructions too (`--counter instructions`): at the study's own counter sizes
+    /// when it counts already, else at [`CounterSizes::DEFAULT`].
     pub fn count_instructions(&mut self) {
-        self.counter.get_or_insert(DEFAULT_COUNTER_SIZE);
+        self.counter.get_or_insert(CounterSizes::DEFAULT);
     }
 }
 
@@ -162,11 +168,12 @@ pub fn load(file: &Path) -> Result<(Vec<Study>, bool)> {
                 ));
             }
             let overrides = Overrides {
+                scene: sweep.scene.clone(),
                 size: sweep.size.clone(),
                 frames: sweep.frames,
                 warmup: sweep.warmup,
                 counter: sweep.counter.clone(),
-                counter_size: sweep.counter_size.clone(),
+                counter_sizes: sweep.counter_sizes.clone(),
             };
             let dir = file.parent().unwrap_or(Path::new("."));
             let mut studies = Vec::new();
@@ -193,11 +200,12 @@ pub fn load(file: &Path) -> Result<(Vec<Study>, bool)> {
 
 #[derive(Default)]
 struct Overrides {
+    scene: Option<String>,
     size: Option<String>,
     frames: Option<u32>,
     warmup: Option<u32>,
     counter: Option<String>,
-    counter_size: Option<String>,
+    counter_sizes: Option<Vec<String>>,
 }
 
 fn bad(file: &Path, field: &str, message: &str) -> Error {
@@ -212,15 +220,44 @@ fn read(file: &Path) -> Result<SweepFile> {
         path: file.to_owned(),
         message: format!("cannot read the sweep file: {e}"),
     })?;
-    toml::from_str(&text).map_err(|e| Error::Input {
+    let sweep: SweepFile = toml::from_str(&text).map_err(|e| Error::Input {
         path: file.to_owned(),
         message: e.to_string(),
-    })
+    })?;
+    if sweep.counter_size.is_some() {
+        return Err(bad(
+            file,
+            "counter_size",
+            "replaced by `counter_sizes = [\"48x48\", \"96x96\"]`: instructions are counted at \
+             two sizes, and their difference over the added pixels is the per-pixel count",
+        ));
+    }
+    Ok(sweep)
 }
 
-/// `size` and `counter_size`: `WxH` within [`Size`]'s limit, as (width, height).
-fn parse_size(file: &Path, field: &str, text: &str) -> Result<(u32, u32)> {
-    let size: Size = text.parse().map_err(|_| {
+/// `counter_sizes`: two `WxH` sizes, the smaller first ([`CounterSizes`]).
+fn parse_counter_sizes(file: &Path, sizes: &[String]) -> Result<CounterSizes> {
+    let field = "counter_sizes";
+    let [small, large] = sizes else {
+        return Err(bad(
+            file,
+            field,
+            &format!(
+                "{} size(s); give two, the smaller first, e.g. [\"48x48\", \"96x96\"]",
+                sizes.len()
+            ),
+        ));
+    };
+    CounterSizes::new(
+        parse_size(file, field, small)?,
+        parse_size(file, field, large)?,
+    )
+    .map_err(|e| bad(file, field, &e))
+}
+
+/// `size` and `counter_sizes`: `WxH` within [`Size`]'s limit.
+fn parse_size(file: &Path, field: &str, text: &str) -> Result<Size> {
+    text.parse().map_err(|_| {
         bad(
             file,
             field,
@@ -229,8 +266,7 @@ fn parse_size(file: &Path, field: &str, text: &str) -> Result<(u32, u32)> {
                 Size::MAX_SIDE
             ),
         )
-    })?;
-    Ok((size.width, size.height))
+    })
 }
 
 fn value_text(value: &toml::Value) -> Option<String> {
@@ -270,7 +306,11 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
         .clone()
         .or_else(|| sweep.size.clone())
         .unwrap_or_else(|| "320x180".into());
-    let (width, height) = parse_size(file, "size", &size_text)?;
+    let Size { width, height } = parse_size(file, "size", &size_text)?;
+    let scene = match over.scene.as_ref().or(sweep.scene.as_ref()) {
+        None => DEFAULT_SCENE,
+        Some(text) => text.parse().map_err(|e: String| bad(file, "scene", &e))?,
+    };
     let frames = over.frames.or(sweep.frames).unwrap_or(10);
     if frames == 0 {
         return Err(bad(
@@ -282,10 +322,12 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
     let warmup = over.warmup.or(sweep.warmup).unwrap_or(2);
     let counter = match over.counter.as_deref().or(sweep.counter.as_deref()) {
         None | Some("none") => None,
-        Some("instructions") => match over.counter_size.as_ref().or(sweep.counter_size.as_ref()) {
-            Some(text) => Some(parse_size(file, "counter_size", text)?),
-            None => Some(DEFAULT_COUNTER_SIZE),
-        },
+        Some("instructions") => {
+            match over.counter_sizes.as_ref().or(sweep.counter_sizes.as_ref()) {
+                Some(sizes) => Some(parse_counter_sizes(file, sizes)?),
+                None => Some(CounterSizes::DEFAULT),
+            }
+        }
         Some(other) => {
             return Err(bad(
                 file,
@@ -488,6 +530,7 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
         description: sweep.description.clone().unwrap_or_default(),
         file: file.to_owned(),
         source_text,
+        scene,
         width,
         height,
         frames,
@@ -524,7 +567,11 @@ pub struct StudyMeta {
     pub skipped: Vec<String>,
     pub published: Vec<Published>,
     pub fit: bool,
+    /// The smaller counted size: that of the whole-draw counts.
     pub counter_size: Option<[u32; 2]>,
+    /// Both counted sizes, the smaller first; absent from studies counted at one size.
+    #[serde(default)]
+    pub counter_sizes: Option<[[u32; 2]; 2]>,
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -543,6 +590,7 @@ pub fn run(
 ) -> Result<(super::bench::Results, StudyMeta)> {
     let config = super::bench::BenchConfig {
         cases: study.points.iter().map(|p| p.case.clone()).collect(),
+        scene: study.scene,
         width: study.width,
         height: study.height,
         frames: study.frames,
@@ -553,11 +601,12 @@ pub fn run(
     let mut results = super::bench::run(gpu, equirect, &config, |done, total| {
         progress("frames", done as usize, total as usize)
     })?;
-    if let (Some(size), Some(setup)) = (study.counter, counter) {
-        super::counter::add_counts(&mut results, setup, &all, size, |done, total| {
+    if let (Some(sizes), Some(setup)) = (study.counter, counter) {
+        super::counter::add_counts(&mut results, setup, &all, sizes, |done, total| {
             progress("counted", done, total)
         })?;
     }
+    let counted = study.counter.filter(|_| counter.is_some());
     let meta = StudyMeta {
         name: study.name.clone(),
         title: study.title.clone(),
@@ -576,10 +625,8 @@ pub fn run(
         skipped: study.skipped.clone(),
         published: study.published.clone(),
         fit: study.fit,
-        counter_size: study
-            .counter
-            .filter(|_| counter.is_some())
-            .map(|(w, h)| [w, h]),
+        counter_size: counted.map(|c| [c.small.width, c.small.height]),
+        counter_sizes: counted.map(|c| c.both().map(|s| [s.width, s.height])),
     };
     Ok((results, meta))
 }
@@ -702,8 +749,8 @@ pub fn charts_of(
         "chart-time",
         Chart {
             title: format!(
-                "{} — shaded draw, {}x{} ({device})",
-                meta.title, results.size[0], results.size[1]
+                "{} — shaded draw, {}x{} {} ({device})",
+                meta.title, results.size[0], results.size[1], results.scene
             ),
             x_label: x_axis.clone(),
             y_label: "GPU time, ms (median; whiskers min–max)".into(),
@@ -712,7 +759,41 @@ pub fn charts_of(
             reference: baseline.map(|b| ("ggx baseline".to_string(), b.median_ms)),
         },
     )];
-    if results.runs.iter().any(|r| r.instructions.is_some()) {
+    /// A counted value: no whiskers.
+    fn point(x: f64) -> (f64, f64, f64) {
+        (x, x, x)
+    }
+    if results
+        .runs
+        .iter()
+        .any(|r| r.instructions_per_pixel.is_some())
+    {
+        let sizes = results
+            .counter
+            .as_ref()
+            .map(|c| {
+                let [[a, b], [c, d]] = c.sizes;
+                format!(", {a}x{b} → {c}x{d}")
+            })
+            .unwrap_or_default();
+        charts.push((
+            "chart-instructions",
+            Chart {
+                title: format!(
+                    "{} — JIT instructions per shaded pixel, {}{sizes}",
+                    meta.title, results.scene
+                ),
+                x_label: x_axis,
+                y_label: "JIT instructions per added pixel (callgrind, LP_NUM_THREADS=0)".into(),
+                categories,
+                series: build(&|r| r.instructions_per_pixel.map(point)),
+                reference: baseline
+                    .and_then(|b| b.instructions_per_pixel)
+                    .map(|n| ("ggx baseline".to_string(), n)),
+            },
+        ));
+    } else if results.runs.iter().any(|r| r.instructions.is_some()) {
+        // Counted at one size, before the per-pixel count: the whole draw's.
         let size = meta
             .counter_size
             .map(|[w, h]| format!("{w}x{h}"))
@@ -727,7 +808,7 @@ pub fn charts_of(
                 x_label: x_axis,
                 y_label: "JIT instructions (callgrind, LP_NUM_THREADS=0)".into(),
                 categories,
-                series: build(&|r| r.instructions.map(|n| (n as f64, n as f64, n as f64))),
+                series: build(&|r| r.instructions.map(|n| point(n as f64))),
                 reference: baseline
                     .and_then(|b| b.instructions)
                     .map(|n| ("ggx baseline".to_string(), n as f64)),
