@@ -59,17 +59,15 @@ vec3 shade_lobes(vec3 n, vec3 v, float n_dot_v) {
 }
 
 // The baked lobes at the view cosine: each lobe's (weight, √α) interpolated linearly between
-// its two samples around √μ (render/baked.rs), then lit like the model's (lobe_radiance, with the mip read off
-// √α directly).
+// its two samples around √μ by the sampler (render/baked.rs), then lit like the model's
+// (lobe_radiance, with the mip read off √α directly). The row coordinate is a texel centre, so
+// the filter's weight on the neighbouring lobe is zero.
 vec3 shade_baked(vec3 n, vec3 v, float n_dot_v) {
-    float x = sqrt(n_dot_v) * float(BAKED_SIZE - 1u);
-    uint j = min(uint(x), BAKED_SIZE - 2u);
-    float f = x - float(j);
+    float u = (sqrt(n_dot_v) * float(BAKED_SIZE - 1u) + 0.5) / float(BAKED_SIZE);
     vec3 mirror = reflect(-v, n);
     vec3 sum = vec3(0.0);
     [[unroll]] for (uint k = 0u; k < LOBE_COUNT; ++k) {
-        uint at = k * BAKED_SIZE + j;
-        vec4 lobe = mix(baked_lobes[at], baked_lobes[at + 1u], f);
+        vec4 lobe = textureLod(baked_lobes, vec2(u, (float(k) + 0.5) / float(LOBE_COUNT)), 0.0);
         // .a is the perceptual roughness √α, the cube's mip axis.
         vec3 dir = ibl_dominant_direction(n, tm_bit(RETRO_MASK, k) ? v : mirror, lobe.a * lobe.a);
         sum += lobe.rgb * textureLod(prefiltered, dir, lobe.a * (frame.params.x - 1.0)).rgb;

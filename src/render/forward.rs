@@ -7,9 +7,9 @@ use crate::gpu::Gpu;
 use crate::model::LayerParams;
 use crate::shader::specialize::{check_generic_fit, Structure};
 use crate::variant::{Mode, ShadeSpec, VariantKey};
-use crate::vk::{Buffer, Format, GraphicsDesc, Pipeline, PipelineLayout};
+use crate::vk::{Format, GraphicsDesc, Pipeline, PipelineLayout};
 
-use super::baked::BakedTable;
+use super::baked::{BakedTable, BakedTexture};
 use super::scene::Vertex;
 
 /// The entry points compiled per variant (the only ones that see the variant's defines).
@@ -18,8 +18,8 @@ pub const ENTRIES: [&str; 2] = ["forward.vert.glsl", "forward.frag.glsl"];
 /// What a per-material pass was built for.
 pub struct PassMaterial {
     pub layers: Vec<LayerParams>,
-    /// `mode=baked`: the lobe table, on the host and in the buffer the pass reads.
-    pub baked: Option<(BakedTable, Buffer)>,
+    /// `mode=baked`: the lobe table, on the host and in the texture the pass reads.
+    pub baked: Option<(BakedTable, BakedTexture)>,
 }
 
 pub struct ForwardPass {

@@ -17,7 +17,7 @@ use crate::tables::fgd::{FgdImages, FgdLookup};
 use crate::tables::split_sum::{self, SplitSumTable};
 use crate::tables::tir::{self, TirTable};
 use crate::variant::{Fgd, Tir, VariantKey, G2};
-use crate::vk::{Buffer, DescriptorSet};
+use crate::vk::{Buffer, DescriptorSet, ImageView};
 
 /// The shading set's layout and the tables of every variant prepared so far.
 pub struct ShadingInputs<'g> {
@@ -94,22 +94,23 @@ impl<'g> ShadingInputs<'g> {
 
     /// The shading set for `variant` and the stack in `material`, with a `mode=baked`
     /// material's lobe table (`baked`; other passes never read binding 5, which then holds
-    /// the material again).
+    /// the split-sum table again).
     pub fn bind(
         &self,
         variant: VariantKey,
         material: &Buffer,
-        baked: Option<&Buffer>,
+        baked: Option<&ImageView>,
         name: &str,
     ) -> Result<DescriptorSet> {
         let fgd = self.fgd(variant)?;
+        let split_sum = &self.split_sum(variant)?.view;
         let views = InputViews {
             material,
-            split_sum: &self.split_sum(variant)?.view,
+            split_sum,
             tir: self.tir(variant).view_for(variant.tir),
             fgd_volume: &fgd.volume_view,
             fgd_plane: &fgd.plane_view,
-            baked: baked.unwrap_or(material),
+            baked: baked.unwrap_or(split_sum),
         };
         Ok(self.layout.bind(&self.gpu.device, &views, name)?)
     }

@@ -174,8 +174,8 @@ impl<'g> Renderer<'g> {
         let baked = if variant.mode == Mode::Baked {
             let evaluator = baked::evaluator_for(self.gpu, variant, layers.len())?;
             let table = BakedTable::build(&evaluator, layers, baked_size)?;
-            let buffer = table.upload(self.gpu, "baked lobes")?;
-            Some((table, buffer))
+            let texture = table.upload(self.gpu, "baked lobes")?;
+            Some((table, texture))
         } else {
             None
         };
@@ -237,7 +237,7 @@ impl<'g> Renderer<'g> {
             .material
             .as_ref()
             .and_then(|m| m.baked.as_ref())
-            .map(|(_, buffer)| buffer);
+            .map(|(_, texture)| &texture.view);
         let shading = self
             .inputs
             .bind(pass.variant, &material, baked, "shading")?;

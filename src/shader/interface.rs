@@ -138,8 +138,8 @@ pub const SHADING_BINDINGS: [Binding; 6] = [
     },
     Binding {
         binding: 5,
-        kind: BindingKind::StorageBuffer,
-        name: "Baked",
+        kind: BindingKind::SampledImage,
+        name: "baked_lobes",
     },
 ];
 
@@ -150,8 +150,8 @@ pub struct InputViews<'a> {
     pub tir: &'a ImageView,
     pub fgd_volume: &'a ImageView,
     pub fgd_plane: &'a ImageView,
-    /// `mode=baked`: the lobe table (`render::baked::BakedLobes`); any storage buffer otherwise.
-    pub baked: &'a Buffer,
+    /// `mode=baked`: the lobe table (`render::baked::BakedTexture`); any 2-D view otherwise.
+    pub baked: &'a ImageView,
 }
 
 /// The shading set's layout (what a pipeline that shades lists as set 0) and the sampler its
@@ -184,7 +184,7 @@ impl ShadingLayout {
             .write(2, sampled(views.tir))
             .write(3, sampled(views.fgd_volume))
             .write(4, sampled(views.fgd_plane))
-            .write(5, Resource::Buffer(views.baked));
+            .write(5, sampled(views.baked));
         Ok(set)
     }
 }

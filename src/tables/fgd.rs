@@ -798,7 +798,7 @@ impl<'g> FgdProbe<'g> {
             tir: self.tir_unused.view_for(crate::variant::Tir::None),
             fgd_volume: &images.volume_view,
             fgd_plane: &images.plane_view,
-            baked: &self.material,
+            baked: &split_sum.view,
         };
         let shading = self.layout.bind(device, &views, "fgd probe shading")?;
         let mut set = DescriptorSet::new(device, &self.kernel.set_layout, "fgd probe")?;

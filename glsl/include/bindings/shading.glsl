@@ -14,10 +14,8 @@ layout(set = 0, binding = 1) uniform sampler2D split_sum;   // (A, B) at (μ, �
 layout(set = 0, binding = 2) uniform sampler3D tir_table;   // (μ, α, η), vertex-centred
 layout(set = 0, binding = 3) uniform sampler3D fgd_table;   // 4d, resampled4d, belcour's η < 1
 layout(set = 0, binding = 4) uniform sampler2D fgd_belcour; // belcour's folded integrals
-// MODE_BAKED: the material's lobes over the view cosine, lobe k's samples at
-// [k·BAKED_SIZE, (k + 1)·BAKED_SIZE), sample j at √μ = j/(BAKED_SIZE − 1): (weight RGB, √α).
-layout(set = 0, binding = 5, std430) readonly buffer Baked {
-    vec4 baked_lobes[];
-};
+// MODE_BAKED: the material's lobes over the view cosine, (weight RGB, √α): lobe k in row k,
+// sample j in column j at √μ = j/(BAKED_SIZE − 1) (vertex-centred), read with the linear filter.
+layout(set = 0, binding = 5) uniform sampler2D baked_lobes;
 
 #endif
