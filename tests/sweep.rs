@@ -214,6 +214,43 @@ fn bad_sweep_files_are_refused_before_any_gpu_work() {
         e.contains("`counter_size`") && e.contains("counter_sizes = ["),
         "{e}"
     );
+    let baked = "[[axis]]\nname = \"variant\"\nvalues = [\"mode=specialized\", \"mode=baked\"]\n";
+    for (body, words) in [
+        (
+            "[[target]]\nlabel = \"t\"\nmatch = \"mode=baked\"\nmaterial = \"gold\"\nmax = 1.5\n",
+            vec!["target[0].match", "no run of the study on gold"],
+        ),
+        (
+            "[[target]]\nlabel = \"t\"\nmatch = \"mode=baked\"\nmaterial = \"varnished-gold\"\nmax = -1\n",
+            vec!["target[0].max", "-1", "positive ratio"],
+        ),
+        (
+            "[[target]]\nlabel = \"t\"\nmatch = \"mode=baked\"\nagainst = \"mode=fast\"\nmaterial = \"varnished-gold\"\nmax = 1\n",
+            vec!["target[0].against", "fast"],
+        ),
+        (
+            "[bake_error]\nsizes = [64, 32]\n",
+            vec!["bake_error.sizes", "increasing order"],
+        ),
+        (
+            "[bake_error]\nsizes = [1, 32]\n",
+            vec!["bake_error.sizes", "1: allowed: 2..=4096"],
+        ),
+        (
+            "[bake_error]\nsizes = [32]\nimage_size = 4\n",
+            vec!["bake_error.image_size", "4: allowed: 8..=2048"],
+        ),
+    ] {
+        let e = load_error("target", &format!("{baked}{body}"));
+        for w in words {
+            assert!(e.contains(w), "`{w}` missing from {e}");
+        }
+    }
+    let e = load_error("unbaked", "[bake_error]\nsizes = [32]\n");
+    assert!(
+        e.contains("bake_error") && e.contains("no mode=baked run"),
+        "{e}"
+    );
     let e = load_error("suite", "studies = [\"missing.toml\"]\n");
     assert!(e.contains("missing.toml"), "{e}");
 
@@ -271,6 +308,8 @@ fn every_committed_sweep_file_expands() {
         "g2",
         "flux",
         "growth",
+        "specialization",
+        "specialized-scaling",
     ] {
         let (studies, _) = sweep::load(&dir.join(format!("{name}.toml"))).unwrap();
         assert_eq!(
@@ -282,4 +321,14 @@ fn every_committed_sweep_file_expands() {
         study.count_instructions();
         assert_eq!(study.counter, Some(CounterSizes::DEFAULT));
     }
+    // The old method's study stays on the sphere; issue 11's targets and bake-error study load.
+    let (dilution, _) = sweep::load(&dir.join("dilution.toml")).unwrap();
+    assert_eq!(dilution[0].scene, Scene::Sphere);
+    let (specialization, _) = sweep::load(&dir.join("specialization.toml")).unwrap();
+    assert_eq!(specialization[0].targets.len(), 2);
+    assert_eq!(specialization[0].targets[0].material, "varnished gold");
+    assert_eq!(
+        specialization[0].bake_error,
+        Some((vec![32, 64, 128, 256], 128))
+    );
 }

@@ -16,7 +16,7 @@ use crate::variant::VariantKey;
 
 use super::bench::{Results, Run};
 use super::stats::MinMeanMax;
-use super::sweep::{key_matches, Published, StudyMeta};
+use super::sweep::{key_matches, Published, StudyMeta, Target};
 
 /// One study's directory, read back.
 pub struct StudyDir {
@@ -147,6 +147,25 @@ fn instructions_ratio(run: &Run, base: Option<&Run>) -> Option<f64> {
     Some(run.instructions? as f64 / base?.instructions? as f64)
 }
 
+/// The ggx baseline `run` is divided by: the one on its material, else the study's first.
+fn baseline_of<'a>(r: &'a Results, run: &Run) -> Option<&'a Run> {
+    let ggx = |b: &&Run| b.variant.starts_with("model=ggx");
+    r.runs
+        .iter()
+        .filter(ggx)
+        .find(|b| b.material == run.material)
+        .or_else(|| r.runs.iter().find(ggx))
+}
+
+/// `a` over `b` on the study's main basis: JIT instructions per pixel, else per draw, else
+/// median time; with the basis's name.
+fn main_ratio(r: &Results, a: &Run, b: &Run) -> (f64, &'static str) {
+    match jit_ratio(a, b) {
+        Some(x) => (x, jit_basis(r)),
+        None => (a.median_ms / b.median_ms, "median time"),
+    }
+}
+
 fn fmt_per_pixel(n: Option<f64>) -> String {
     n.map(|n| format!("{n:.1}")).unwrap_or_else(|| "–".into())
 }
@@ -217,6 +236,7 @@ pub fn render(studies: &[StudyDir], out: &Path) -> String {
     md += &index;
     md += "\n";
     summary_section(&mut md, studies);
+    targets_summary(&mut md, studies);
     for s in studies {
         study_section(&mut md, s, out_dir);
     }
@@ -261,6 +281,43 @@ fn summary_section(md: &mut String, studies: &[StudyDir]) {
             } else {
                 "–".into()
             }
+        );
+    }
+    md.push('\n');
+}
+
+/// Every study's `[[target]]`s in one table: what was asked, what was measured.
+fn targets_summary(md: &mut String, studies: &[StudyDir]) {
+    let rows: Vec<(&StudyDir, &Target)> = studies
+        .iter()
+        .flat_map(|s| s.meta.targets.iter().map(move |t| (s, t)))
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        md,
+        "## Summary: targets\n\nThe ratio bounds the study files set (`[[target]]`), \
+         measured; each study's section has the runs.\n"
+    );
+    let _ = writeln!(md, "| study | target | material | measured | bound | |");
+    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    for (s, t) in rows {
+        let (measured, verdict) = match target_ratio(s, t) {
+            Some((ratio, basis, _, _)) => (
+                format!("{ratio:.2}× ({basis})"),
+                target_verdict(ratio, t.max),
+            ),
+            None => ("not measured".into(), String::new()),
+        };
+        let _ = writeln!(
+            md,
+            "| [{}](#{}) | {} | {} | {measured} | ≤ {:.2}× | {verdict} |",
+            s.meta.title,
+            anchor(&s.meta.title),
+            t.label,
+            t.material,
+            t.max
         );
     }
     md.push('\n');
@@ -378,13 +435,14 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
                 md,
                 " {} | {} | {} |",
                 fmt_count(run.instructions),
-                fmt_ratio(instructions_ratio(run, base)),
+                fmt_ratio(instructions_ratio(run, baseline_of(r, run).or(base))),
                 fmt_count(run.instructions_total)
             );
         }
         md.push('\n');
     }
     md.push('\n');
+    pivot_section(md, s);
     for chart in ["chart-time", "chart-instructions"] {
         let png = s.dir.join(format!("{chart}.png"));
         if png.is_file() {
@@ -398,6 +456,12 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
     }
     if !m.published.is_empty() {
         published_section(md, s);
+    }
+    if !m.targets.is_empty() {
+        targets_section(md, s);
+    }
+    if !m.bake_error.is_empty() {
+        bake_error_section(md, s, out_dir);
     }
     if m.fit {
         fit_section(md, s);
@@ -416,6 +480,176 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
             "Skipped (stack deeper than `max_layers`): {}.\n",
             m.skipped.join("; ")
         );
+    }
+}
+
+/// The index of a study's one axis besides `material` (an axis or the `materials` list).
+fn one_axis_by_material(m: &StudyMeta) -> Option<usize> {
+    let others: Vec<usize> = (0..m.axes.len())
+        .filter(|&i| m.axes[i] != "material")
+        .collect();
+    match others[..] {
+        [axis] => Some(axis),
+        _ => None,
+    }
+}
+
+/// Studies of several materials over one other axis: each material's ratios to its ggx
+/// baseline side by side (material rows, the axis's values as columns).
+fn pivot_section(md: &mut String, s: &StudyDir) {
+    let (r, m) = (&s.results, &s.meta);
+    let Some(axis) = one_axis_by_material(m) else {
+        return;
+    };
+    let mut materials: Vec<&str> = Vec::new();
+    let mut columns: Vec<&str> = Vec::new();
+    for p in &m.points {
+        let material = r.runs[p.run].material.as_str();
+        if !materials.contains(&material) {
+            materials.push(material);
+        }
+        if !columns.contains(&p.coords[axis].as_str()) {
+            columns.push(&p.coords[axis]);
+        }
+    }
+    if materials.len() < 2 {
+        return;
+    }
+    let basis = if per_pixel(r) {
+        "JIT instructions per shaded pixel"
+    } else if r.runs.iter().any(|run| run.instructions.is_some()) {
+        "JIT instructions of the draw"
+    } else {
+        "median time"
+    };
+    let _ = writeln!(
+        md,
+        "By material ({basis}, × the material's ggx baseline; the model is the material's own \
+         unless the {} says otherwise):\n",
+        m.axes[axis]
+    );
+    let _ = writeln!(md, "| material | {} |", columns.join(" | "));
+    let _ = writeln!(md, "|---|{}", "---|".repeat(columns.len()));
+    for material in materials {
+        let mut line = format!("| {material} |");
+        for column in &columns {
+            let cell = m
+                .points
+                .iter()
+                .map(|p| (p, &r.runs[p.run]))
+                .find(|(p, run)| run.material == material && p.coords[axis] == *column)
+                .and_then(|(_, run)| Some(main_ratio(r, run, baseline_of(r, run)?).0));
+            let _ = write!(line, " {} |", fmt_ratio(cell));
+        }
+        let _ = writeln!(md, "{line}");
+    }
+    md.push('\n');
+}
+
+/// The measured ratio of a `[[target]]`: (ratio, basis, the run, the divisor).
+fn target_ratio<'a>(s: &'a StudyDir, t: &Target) -> Option<(f64, &'static str, &'a Run, &'a Run)> {
+    let r = &s.results;
+    let on = |pattern: &str| {
+        r.runs
+            .iter()
+            .find(|run| run.material == t.material && key_matches(&run.variant, pattern))
+    };
+    let run = on(&t.matches)?;
+    let against = match &t.against {
+        Some(pattern) => on(pattern)?,
+        None => r
+            .runs
+            .iter()
+            .find(|b| b.variant.starts_with("model=ggx") && b.material == t.material)?,
+    };
+    let (ratio, basis) = main_ratio(r, run, against);
+    Some((ratio, basis, run, against))
+}
+
+/// Whether `ratio` meets a bound of `max`, and by how much it misses.
+fn target_verdict(ratio: f64, max: f64) -> String {
+    if ratio <= max {
+        "met".into()
+    } else {
+        format!("missed by {:.0} %", (ratio / max - 1.0) * 100.0)
+    }
+}
+
+fn targets_section(md: &mut String, s: &StudyDir) {
+    let _ = writeln!(
+        md,
+        "Targets (a ratio bound per row; the study records them, nothing fails on them):\n"
+    );
+    let _ = writeln!(md, "| target | run | against | measured | bound | |");
+    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    for t in &s.meta.targets {
+        match target_ratio(s, t) {
+            Some((ratio, basis, run, against)) => {
+                let _ = writeln!(
+                    md,
+                    "| {} | `{}` on {} | `{}` | {ratio:.2}× ({basis}) | ≤ {:.2}× | {} |",
+                    t.label,
+                    short_variant(&run.variant),
+                    t.material,
+                    short_variant(&against.variant),
+                    t.max,
+                    target_verdict(ratio, t.max)
+                );
+            }
+            None => {
+                let _ = writeln!(
+                    md,
+                    "| {} | `{}` on {} | – | not measured | ≤ {:.2}× | |",
+                    t.label, t.matches, t.material, t.max
+                );
+            }
+        }
+    }
+    md.push('\n');
+}
+
+fn bake_error_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
+    let m = &s.meta;
+    let sizes: Vec<u32> = m.bake_error[0].rows.iter().map(|row| row.size).collect();
+    let _ = writeln!(
+        md,
+        "Baked tables against the per-pixel model (`render::baked::error_study`; `lamina \
+         bake-error --material M` prints one material's): per table size, the largest lobe \
+         error (weight relative to the reflectance, roughness weighted by the lobe's share) \
+         at view cosines between the samples, and the largest relative pixel difference of \
+         the baked render from the per-pixel one at {0}x{0}. Lobes / image:\n",
+        m.bake_error[0].image_size
+    );
+    let header: Vec<String> = sizes.iter().map(|n| n.to_string()).collect();
+    let _ = writeln!(md, "| material | {} |", header.join(" | "));
+    let _ = writeln!(md, "|---|{}", "---|".repeat(sizes.len()));
+    for e in &m.bake_error {
+        let cells: Vec<String> = e
+            .rows
+            .iter()
+            .map(|row| format!("{:.1e} / {:.1e}", row.lobe_error, row.image_error))
+            .collect();
+        let _ = writeln!(md, "| {} | {} |", e.material, cells.join(" | "));
+    }
+    let worst: Vec<String> = (0..sizes.len())
+        .map(|i| {
+            let (lobe, image) = m.bake_error.iter().fold((0.0f64, 0.0f64), |(l, im), e| {
+                (l.max(e.rows[i].lobe_error), im.max(e.rows[i].image_error))
+            });
+            format!("{lobe:.1e} / {image:.1e}")
+        })
+        .collect();
+    let _ = writeln!(md, "| **worst** | {} |\n", worst.join(" | "));
+    for chart in ["chart-bake-lobes", "chart-bake-image"] {
+        let png = s.dir.join(format!("{chart}.png"));
+        if png.is_file() {
+            let _ = writeln!(
+                md,
+                "![{} — {chart}]({})\n",
+                m.title,
+                relative(&png, out_dir)
+            );
+        }
     }
 }
 
@@ -548,6 +782,9 @@ fn reading(s: &StudyDir) -> Vec<String> {
         lines.push(line);
     }
 
+    lines.extend(dilution(r));
+    lines.extend(columns_reading(s));
+
     // lavapipe's draw-time rebuild: far more instructions outside the JIT code than the ggx
     // baseline of the same material (no verdict without that baseline).
     let overhead = |run: &Run| Some(run.instructions_total?.saturating_sub(run.instructions?));
@@ -633,6 +870,133 @@ fn reading(s: &StudyDir) -> Vec<String> {
             line += "; a GPU with native half floats saves registers and scratch with it instead.";
             lines.push(line);
         }
+    }
+    lines
+}
+
+/// `lo–hi× (median m×)` of a non-empty list of ratios.
+fn spread(values: &mut [f64]) -> String {
+    values.sort_by(f64::total_cmp);
+    let (lo, hi) = (values[0], values[values.len() - 1]);
+    let median = values[values.len() / 2];
+    if (hi - lo).abs() < 0.005 {
+        format!("{lo:.2}×")
+    } else {
+        format!("{lo:.2}–{hi:.2}× (median {median:.2}×)")
+    }
+}
+
+/// How much whole-draw counts understate the per-pixel ratios to ggx: the per-draw costs
+/// (vertex work, triangle setup, partly covered blocks) are the same for every variant and
+/// weigh most at small sizes.
+fn dilution(r: &Results) -> Option<String> {
+    let counter = r.counter.as_ref()?;
+    let mut shares: Vec<f64> = r
+        .runs
+        .iter()
+        .filter(|run| !run.variant.starts_with("model=ggx"))
+        .filter_map(|run| {
+            let base = baseline_of(r, run)?;
+            let whole = instructions_ratio(run, Some(base))?;
+            Some(whole / run.instructions_per_pixel_ratio?)
+        })
+        .collect();
+    if shares.is_empty() {
+        return None;
+    }
+    let [w, h] = counter.sizes[0];
+    let text = spread(&mut shares);
+    let median = shares[shares.len() / 2];
+    Some(if median < 0.95 {
+        format!(
+            "Whole-draw counts dilute the ratios: a run's whole-draw ×ggx at {w}x{h} is {text} \
+             of its per-pixel ×ggx, because what every draw costs whatever it shades (vertex \
+             work, triangle setup, partly covered blocks) is the same for both variants."
+        )
+    } else {
+        format!(
+            "A run's whole-draw ×ggx at {w}x{h} is {text} of its per-pixel ×ggx: on the {} \
+             scene the per-draw costs are small next to the shading.",
+            r.scene
+        )
+    })
+}
+
+/// For a study of several materials over one other axis: each column's ratio to ggx over
+/// the materials, and how the costliest column compares with each per-material mode.
+fn columns_reading(s: &StudyDir) -> Vec<String> {
+    let (r, m) = (&s.results, &s.meta);
+    let Some(axis) = one_axis_by_material(m) else {
+        return Vec::new();
+    };
+    let mut columns: Vec<&str> = Vec::new();
+    for p in &m.points {
+        if !columns.contains(&p.coords[axis].as_str()) {
+            columns.push(&p.coords[axis]);
+        }
+    }
+    let materials = |column: &str| -> Vec<&Run> {
+        m.points
+            .iter()
+            .filter(|p| p.coords[axis] == column)
+            .map(|p| &r.runs[p.run])
+            .collect()
+    };
+    let count = materials(columns[0]).len();
+    if count < 2 {
+        return Vec::new();
+    }
+    let to_ggx = |run: &Run| Some(main_ratio(r, run, baseline_of(r, run)?).0);
+    let mut lines = Vec::new();
+    let mut medians = Vec::new();
+    let mut parts = Vec::new();
+    for column in &columns {
+        let mut ratios: Vec<f64> = materials(column).into_iter().filter_map(to_ggx).collect();
+        if ratios.is_empty() {
+            continue;
+        }
+        parts.push(format!("`{column}` {}", spread(&mut ratios)));
+        medians.push((*column, ratios[ratios.len() / 2]));
+    }
+    let basis = if per_pixel(r) || r.runs.iter().any(|run| run.instructions.is_some()) {
+        jit_basis(r)
+    } else {
+        "median time"
+    };
+    lines.push(format!(
+        "× the material's ggx baseline ({basis}) over the {count} materials: {}.",
+        parts.join("; ")
+    ));
+    let Some(&(costliest, _)) = medians.iter().max_by(|a, b| a.1.total_cmp(&b.1)) else {
+        return lines;
+    };
+    let mut factors = Vec::new();
+    for column in columns.iter().filter(|c| **c != costliest) {
+        let per_material = materials(column)
+            .first()
+            .and_then(|run| run.variant.parse::<VariantKey>().ok())
+            .is_some_and(|k| k.mode.per_material());
+        if !per_material {
+            continue;
+        }
+        let mut ratios: Vec<f64> = materials(column)
+            .into_iter()
+            .filter_map(|run| {
+                let top = materials(costliest)
+                    .into_iter()
+                    .find(|c| c.material == run.material)?;
+                Some(main_ratio(r, top, run).0)
+            })
+            .collect();
+        if !ratios.is_empty() {
+            factors.push(format!("{} `{column}`", spread(&mut ratios)));
+        }
+    }
+    if !factors.is_empty() {
+        lines.push(format!(
+            "`{costliest}` costs {} on the same material.",
+            factors.join(", ")
+        ));
     }
     lines
 }
@@ -808,6 +1172,8 @@ mod tests {
                 fit: false,
                 counter_size: None,
                 counter_sizes: None,
+                targets: Vec::new(),
+                bake_error: Vec::new(),
             },
         };
         let lines = reading(&study);
@@ -901,6 +1267,8 @@ mod tests {
                 fit: false,
                 counter_size: Some([48, 48]),
                 counter_sizes: Some([[48, 48], [96, 96]]),
+                targets: Vec::new(),
+                bake_error: Vec::new(),
             },
         };
         let md = render(std::slice::from_ref(&study), Path::new("REPORT.md"));
@@ -924,6 +1292,116 @@ mod tests {
             md.contains("2-flux against ggx: the talk 8.00×; ours by time 1.00×, 0.12× the talk's, by JIT instructions per pixel 8.00×, agrees."),
             "{md}"
         );
+    }
+
+    /// A study of two materials over the mode: the pivot, the targets (met and missed, by how
+    /// much), the per-mode reading, the dilution line and the bake-error table.
+    #[test]
+    fn targets_pivot_dilution_and_bake_error_are_reported() {
+        let key = |k: &str| k.parse::<VariantKey>().unwrap().to_string();
+        let counted = |variant: &str, material: &str, jit: u64, per_pixel: f64, ratio: f64| Run {
+            material: material.into(),
+            instructions_per_pixel: Some(per_pixel),
+            instructions_per_pixel_ratio: Some(ratio),
+            ..run(&key(variant), 1.0, jit, jit * 2)
+        };
+        let generic = "model=tm2,max_layers=16";
+        let baked = "model=tm2,mode=baked";
+        let runs = vec![
+            counted("model=ggx", "gold", 1_000_000, 300.0, 1.0),
+            counted("model=ggx", "copper", 1_000_000, 300.0, 1.0),
+            counted(generic, "gold", 4_000_000, 3000.0, 10.0),
+            counted(baked, "gold", 1_100_000, 360.0, 1.2),
+            counted(generic, "copper", 3_000_000, 1800.0, 6.0),
+            counted(baked, "copper", 1_500_000, 480.0, 1.6),
+        ];
+        let point = |run: usize, v: &str| super::super::sweep::PointMeta {
+            run,
+            coords: vec![v.into()],
+        };
+        let target = |label: &str, material: &str| Target {
+            label: label.into(),
+            matches: "mode=baked".into(),
+            against: None,
+            material: material.into(),
+            max: 1.5,
+        };
+        let study = StudyDir {
+            dir: PathBuf::from("x"),
+            results: Results {
+                device: super::super::bench::DeviceInfo {
+                    name: "llvmpipe".into(),
+                    driver: "llvmpipe Mesa".into(),
+                    api_version: "1.3".into(),
+                    vendor_id: 0x10005,
+                },
+                git_rev: "0".into(),
+                command: "c".into(),
+                size: [8, 8],
+                lp_num_threads: Some("0".into()),
+                scene: crate::render::scene::Scene::Sphere,
+                counter: Some(super::super::bench::CounterInfo {
+                    sizes: [[24, 24], [48, 48]],
+                    shaded_pixels: [300, 1200],
+                }),
+                runs,
+            },
+            meta: StudyMeta {
+                name: "n".into(),
+                title: "t".into(),
+                description: String::new(),
+                sweep_file: "s".into(),
+                axes: vec!["variant".into()],
+                points: vec![
+                    point(2, "generic"),
+                    point(3, "baked"),
+                    point(4, "generic"),
+                    point(5, "baked"),
+                ],
+                skipped: Vec::new(),
+                published: Vec::new(),
+                fit: false,
+                counter_size: Some([24, 24]),
+                counter_sizes: Some([[24, 24], [48, 48]]),
+                targets: vec![
+                    target("baked on gold", "gold"),
+                    target("baked on copper", "copper"),
+                ],
+                bake_error: vec![super::super::sweep::MaterialBakeError {
+                    material: "gold".into(),
+                    variant: key(baked),
+                    image_size: 64,
+                    rows: vec![
+                        super::super::sweep::BakeErrorRow {
+                            size: 32,
+                            lobe_error: 5e-3,
+                            image_error: 2e-2,
+                        },
+                        super::super::sweep::BakeErrorRow {
+                            size: 256,
+                            lobe_error: 3e-4,
+                            image_error: 8e-4,
+                        },
+                    ],
+                }],
+            },
+        };
+        let md = render(std::slice::from_ref(&study), Path::new("REPORT.md"));
+        for expected in [
+            "| material | generic | baked |",
+            "| gold | 10.00× | 1.20× |",
+            "| copper | 6.00× | 1.60× |",
+            "| baked on gold | `model=tm2,max_layers=4,mode=baked` on gold | `model=ggx,max_layers=4` | 1.20× (JIT instructions per pixel) | ≤ 1.50× | met |",
+            "| 1.60× (JIT instructions per pixel) | ≤ 1.50× | missed by 7 % |",
+            "`generic` 6.00–10.00× (median 10.00×); `baked` 1.20–1.60× (median 1.60×)",
+            "`generic` costs 3.75–8.33× (median 8.33×) `baked` on the same material.",
+            "Whole-draw counts dilute the ratios: a run's whole-draw ×ggx at 24x24 is 0.40–0.94× (median 0.92×) of its per-pixel ×ggx",
+            "| gold | 5.0e-3 / 2.0e-2 | 3.0e-4 / 8.0e-4 |",
+            "| **worst** | 5.0e-3 / 2.0e-2 | 3.0e-4 / 8.0e-4 |",
+            "## Summary: targets",
+        ] {
+            assert!(md.contains(expected), "`{expected}` missing from\n{md}");
+        }
     }
 
     #[test]

@@ -76,6 +76,9 @@ pub struct SweepFile {
     pub axes: Vec<AxisSpec>,
     #[serde(default)]
     pub published: Vec<Published>,
+    #[serde(default, rename = "target")]
+    pub targets: Vec<Target>,
+    pub bake_error: Option<BakeErrorSpec>,
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -96,6 +99,52 @@ pub struct Published {
     pub ms: f64,
     /// Where the figure comes from, printed beside it.
     pub source: Option<String>,
+}
+
+/// A ratio a study's runs are held to (`[[target]]`): the run matching `match` on `material`
+/// over the run matching `against` on the same material (its ggx baseline when absent), in
+/// JIT instructions per shaded pixel where counted at two sizes, else the whole draw's, else
+/// time. The report says met, or missed and by how much; nothing fails on it.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Target {
+    pub label: String,
+    #[serde(rename = "match")]
+    pub matches: String,
+    pub against: Option<String>,
+    /// A preset or material file in the sweep file; the material's name once loaded.
+    pub material: String,
+    pub max: f64,
+}
+
+/// `[bake_error]`: each baked material's table against the per-pixel model
+/// (`render::baked::error_study`) at these table sizes, the images compared at `image_size`².
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BakeErrorSpec {
+    pub sizes: Vec<u32>,
+    pub image_size: Option<u32>,
+}
+
+/// The images' side when `[bake_error]` names no `image_size`.
+pub const BAKE_ERROR_IMAGE_SIZE: u32 = 128;
+/// The images' sides `[bake_error]` allows.
+pub const BAKE_ERROR_IMAGE_SIZES: std::ops::RangeInclusive<u32> = 8..=2048;
+
+/// One baked material's errors per table size, as `study.json` keeps them.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+pub struct MaterialBakeError {
+    pub material: String,
+    pub variant: String,
+    pub image_size: u32,
+    pub rows: Vec<BakeErrorRow>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, Serialize)]
+pub struct BakeErrorRow {
+    pub size: u32,
+    pub lobe_error: f64,
+    pub image_error: f64,
 }
 
 /// A study, checked and expanded: the cases in run order and each case's axis coordinates.
@@ -119,6 +168,10 @@ pub struct Study {
     pub skipped: Vec<String>,
     pub published: Vec<Published>,
     pub fit: bool,
+    /// `material` resolved to the material's name.
+    pub targets: Vec<Target>,
+    /// Table sizes and image side of the baked-table error study.
+    pub bake_error: Option<(Vec<u32>, u32)>,
 }
 
 impl Study {
@@ -159,12 +212,17 @@ pub fn load(file: &Path) -> Result<(Vec<Study>, bool)> {
                     "an empty list; name at least one sweep file",
                 ));
             }
-            if !sweep.axes.is_empty() || sweep.materials.is_some() || sweep.base.is_some() {
+            if !sweep.axes.is_empty()
+                || sweep.materials.is_some()
+                || sweep.base.is_some()
+                || !sweep.targets.is_empty()
+                || sweep.bake_error.is_some()
+            {
                 return Err(bad(
                     file,
                     "studies",
-                    "a suite lists studies only; `axis`, `materials` and `base` belong in the \
-                     study files",
+                    "a suite lists studies only; `axis`, `materials`, `base`, `target` and \
+                     `bake_error` belong in the study files",
                 ));
             }
             let overrides = Overrides {
@@ -524,6 +582,17 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
         VariantKey::parse_over(&p.matches, VariantKey::default())
             .map_err(|e| bad(file, &format!("published[{i}].match"), &e.to_string()))?;
     }
+    let targets = sweep
+        .targets
+        .iter()
+        .enumerate()
+        .map(|(i, t)| check_target(file, i, t, &points, &resolve))
+        .collect::<Result<Vec<_>>>()?;
+    let bake_error = sweep
+        .bake_error
+        .as_ref()
+        .map(|spec| check_bake_error(file, spec, &points))
+        .transpose()?;
     Ok(Study {
         title: sweep.title.clone().unwrap_or_else(|| name.clone()),
         name,
@@ -541,7 +610,109 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
         skipped,
         published: sweep.published.clone(),
         fit,
+        targets,
+        bake_error,
     })
+}
+
+/// `target[i]`: finite positive bound, key fragments that parse, a material that resolves, and
+/// runs of the study for it to compare.
+fn check_target(
+    file: &Path,
+    i: usize,
+    t: &Target,
+    points: &[Point],
+    resolve: &dyn Fn(&str) -> Result<Stack>,
+) -> Result<Target> {
+    let field = |f: &str| format!("target[{i}].{f}");
+    if !(t.max.is_finite() && t.max > 0.0) {
+        return Err(bad(
+            file,
+            &field("max"),
+            &format!("{}: allowed: a positive ratio", t.max),
+        ));
+    }
+    let material = resolve(&t.material)?.name;
+    let on_material: Vec<&Point> = points
+        .iter()
+        .filter(|p| p.case.stack.name == material)
+        .collect();
+    let patterns = [
+        Some(("match", &t.matches)),
+        t.against.as_ref().map(|a| ("against", a)),
+    ];
+    for (name, pattern) in patterns.into_iter().flatten() {
+        VariantKey::parse_over(pattern, VariantKey::default())
+            .map_err(|e| bad(file, &field(name), &e.to_string()))?;
+        let found = on_material
+            .iter()
+            .any(|p| key_matches(&p.case.variant.to_string(), pattern));
+        if !found {
+            return Err(bad(
+                file,
+                &field(name),
+                &format!("`{pattern}`: no run of the study on {material} has these axis values"),
+            ));
+        }
+    }
+    Ok(Target {
+        material,
+        ..t.clone()
+    })
+}
+
+/// `[bake_error]`: table sizes in the baked table's range, increasing; an image side in range;
+/// and a `mode=baked` run to measure.
+fn check_bake_error(
+    file: &Path,
+    spec: &BakeErrorSpec,
+    points: &[Point],
+) -> Result<(Vec<u32>, u32)> {
+    let range = crate::render::baked::SIZE_RANGE;
+    if spec.sizes.is_empty() {
+        return Err(bad(
+            file,
+            "bake_error.sizes",
+            "an empty list; give table sizes",
+        ));
+    }
+    if let Some(s) = spec.sizes.iter().find(|s| !range.contains(s)) {
+        return Err(bad(
+            file,
+            "bake_error.sizes",
+            &format!("{s}: allowed: {}..={}", range.start(), range.end()),
+        ));
+    }
+    if spec.sizes.windows(2).any(|w| w[0] >= w[1]) {
+        return Err(bad(
+            file,
+            "bake_error.sizes",
+            "give the sizes in increasing order, each once",
+        ));
+    }
+    let image_size = spec.image_size.unwrap_or(BAKE_ERROR_IMAGE_SIZE);
+    if !BAKE_ERROR_IMAGE_SIZES.contains(&image_size) {
+        return Err(bad(
+            file,
+            "bake_error.image_size",
+            &format!(
+                "{image_size}: allowed: {}..={}",
+                BAKE_ERROR_IMAGE_SIZES.start(),
+                BAKE_ERROR_IMAGE_SIZES.end()
+            ),
+        ));
+    }
+    if !points
+        .iter()
+        .any(|p| p.case.variant.mode == crate::variant::Mode::Baked)
+    {
+        return Err(bad(
+            file,
+            "bake_error",
+            "the study has no mode=baked run whose table to measure",
+        ));
+    }
+    Ok((spec.sizes.clone(), image_size))
 }
 
 /// Whether a run's variant key has every axis value `pattern` names (`model=tm6,fp16=on`).
@@ -572,6 +743,10 @@ pub struct StudyMeta {
     /// Both counted sizes, the smaller first; absent from studies counted at one size.
     #[serde(default)]
     pub counter_sizes: Option<[[u32; 2]; 2]>,
+    #[serde(default)]
+    pub targets: Vec<Target>,
+    #[serde(default)]
+    pub bake_error: Vec<MaterialBakeError>,
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -607,6 +782,12 @@ pub fn run(
         })?;
     }
     let counted = study.counter.filter(|_| counter.is_some());
+    let bake_error = match &study.bake_error {
+        Some((sizes, image_size)) => {
+            bake_errors(gpu, equirect, study, sizes, *image_size, &mut progress)?
+        }
+        None => Vec::new(),
+    };
     let meta = StudyMeta {
         name: study.name.clone(),
         title: study.title.clone(),
@@ -627,8 +808,61 @@ pub fn run(
         fit: study.fit,
         counter_size: counted.map(|c| [c.small.width, c.small.height]),
         counter_sizes: counted.map(|c| c.both().map(|s| [s.width, s.height])),
+        targets: study.targets.clone(),
+        bake_error,
     };
     Ok((results, meta))
+}
+
+/// The baked-table error study of every material the study bakes (its first `mode=baked` run
+/// per material).
+fn bake_errors(
+    gpu: &crate::gpu::Gpu,
+    equirect: &crate::imageio::HdrImage,
+    study: &Study,
+    sizes: &[u32],
+    image_size: u32,
+    progress: &mut impl FnMut(&str, usize, usize),
+) -> Result<Vec<MaterialBakeError>> {
+    let mut baked: Vec<&Point> = Vec::new();
+    for p in &study.points {
+        if p.case.variant.mode == crate::variant::Mode::Baked
+            && !baked.iter().any(|b| b.case.stack.name == p.case.stack.name)
+        {
+            baked.push(p);
+        }
+    }
+    let mut renderer = crate::render::Renderer::new(
+        gpu,
+        equirect,
+        crate::tables::environment::EnvDesc::default(),
+    )?;
+    let mut out = Vec::with_capacity(baked.len());
+    for (i, p) in baked.iter().enumerate() {
+        progress("bake error", i, baked.len());
+        let errors = crate::render::baked::error_study(
+            &mut renderer,
+            p.case.variant,
+            &p.case.stack.params(),
+            sizes,
+            image_size,
+        )?;
+        out.push(MaterialBakeError {
+            material: p.case.stack.name.clone(),
+            variant: p.case.variant.to_string(),
+            image_size,
+            rows: errors
+                .iter()
+                .map(|e| BakeErrorRow {
+                    size: e.size,
+                    lobe_error: e.lobe_error,
+                    image_error: e.image_error,
+                })
+                .collect(),
+        });
+    }
+    progress("bake error", baked.len(), baked.len());
+    Ok(out)
 }
 
 /// Writes `results.json`, `results.csv`, `study.json`, `sweep.toml` (the file as run) and the
@@ -812,6 +1046,49 @@ pub fn charts_of(
                 reference: baseline
                     .and_then(|b| b.instructions)
                     .map(|n| ("ggx baseline".to_string(), n as f64)),
+            },
+        ));
+    }
+    if let Some(first) = meta.bake_error.first() {
+        let categories: Vec<String> = first.rows.iter().map(|r| r.size.to_string()).collect();
+        let series = |value: fn(&BakeErrorRow) -> f64| {
+            meta.bake_error
+                .iter()
+                .map(|e| Series {
+                    label: e.material.clone(),
+                    points: e
+                        .rows
+                        .iter()
+                        .enumerate()
+                        .map(|(i, row)| (i, value(row), value(row), value(row)))
+                        .collect(),
+                })
+                .collect()
+        };
+        let bound = Some(("1e-3".to_string(), 1e-3));
+        charts.push((
+            "chart-bake-lobes",
+            Chart {
+                title: format!("{} — baked lobes against the model", meta.title),
+                x_label: "table size (samples per lobe)".into(),
+                y_label: "largest lobe error, relative to R".into(),
+                categories: categories.clone(),
+                series: series(|r| r.lobe_error),
+                reference: bound.clone(),
+            },
+        ));
+        charts.push((
+            "chart-bake-image",
+            Chart {
+                title: format!(
+                    "{} — baked render against the per-pixel one, {}x{}",
+                    meta.title, first.image_size, first.image_size
+                ),
+                x_label: "table size (samples per lobe)".into(),
+                y_label: "largest relative pixel difference".into(),
+                categories,
+                series: series(|r| r.image_error),
+                reference: bound,
             },
         ));
     }

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use egui::{Color32, ComboBox, DragValue, RichText, Slider, Ui};
 
 use crate::error::{Error, Result};
+use crate::material::simplify::simplify;
 use crate::material::{gulbrandsen, presets, Stack};
 use crate::model::LayerParams;
 use crate::render::scene::Camera;
@@ -205,6 +206,7 @@ impl Panels {
                     egui::CollapsingHeader::new("Layer stack")
                         .default_open(true)
                         .show(ui, |ui| self.layers(ui));
+                    ui.collapsing("Simplification", |ui| self.simplification(ui));
                 });
             });
         egui::CentralPanel::no_frame().show(ui, |ui| {
@@ -390,6 +392,15 @@ impl Panels {
         self.artist = artist;
         if changed {
             self.try_stack(edit);
+        }
+    }
+
+    /// What `lamina simplify` would do to the stack being edited, step by step (recomputed as
+    /// it is edited; the rules are exact in the model, `material::simplify`).
+    fn simplification(&mut self, ui: &mut Ui) {
+        let report = simplify(&self.stack).to_string();
+        for line in report.lines() {
+            ui.label(RichText::new(line.trim_start()).small());
         }
     }
 
