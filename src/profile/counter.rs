@@ -271,17 +271,67 @@ pub struct CountRequest<'a> {
 }
 
 /// Counts the instructions of each case's shaded draw at each size: `counts[case][size]`;
-/// `progress(done, total)` follows the worker. Every case gets a count at every size or the
+/// `progress(done, total)` follows the workers. Every case gets a count at every size or the
 /// whole call fails.
+///
+/// The cases are split in consecutive runs over one worker per core (each worker runs
+/// llvmpipe on one thread, `LP_NUM_THREADS=0`), side by side: most of a worker's time is
+/// llvmpipe compiling shaders under valgrind, which the count leaves out. A count does not
+/// depend on the worker that takes it (the gate test counts one case twice).
 pub fn count_instructions(
     request: &CountRequest<'_>,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<Vec<Vec<Counts>>> {
-    let dir = scratch_dir()?;
-    let result = run_worker(request, &dir, &mut progress);
-    // The dumps are read (or the run failed); nothing in the directory is kept.
-    let _ = std::fs::remove_dir_all(&dir);
-    result
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let workers = cores.min(request.cases.len()).max(1);
+    let chunks: Vec<&[Case]> = request
+        .cases
+        .chunks(request.cases.len().div_ceil(workers).max(1))
+        .collect();
+    let total = request.cases.len() * request.sizes.len();
+    let (tx, rx) = std::sync::mpsc::channel::<(usize, usize)>();
+    let outcomes: Vec<Result<Vec<Vec<Counts>>>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = chunks
+            .iter()
+            .enumerate()
+            .map(|(i, cases)| {
+                let tx = tx.clone();
+                let part = CountRequest {
+                    exe: request.exe,
+                    global_args: request.global_args.clone(),
+                    env_map: request.env_map,
+                    cases,
+                    scene: request.scene,
+                    sizes: request.sizes,
+                };
+                scope.spawn(move || {
+                    let dir = scratch_dir(i)?;
+                    let result = run_worker(&part, &dir, &mut |done, _| {
+                        let _ = tx.send((i, done));
+                    });
+                    // The dumps are read (or the run failed); nothing in the directory is kept.
+                    let _ = std::fs::remove_dir_all(&dir);
+                    result
+                })
+            })
+            .collect();
+        drop(tx);
+        let mut done = vec![0; chunks.len()];
+        progress(0, total);
+        for (i, n) in rx {
+            done[i] = n;
+            progress(done.iter().sum(), total);
+        }
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("a counter thread only returns"))
+            .collect()
+    });
+    let mut counts = Vec::with_capacity(request.cases.len());
+    for outcome in outcomes {
+        counts.extend(outcome?);
+    }
+    Ok(counts)
 }
 
 /// Writes the worker's job file (the cases' variants and stacks) into `dir`.
@@ -293,12 +343,16 @@ fn write_job(dir: &Path, cases: &[Case]) -> Result<PathBuf> {
     Ok(stacks)
 }
 
-fn scratch_dir() -> Result<PathBuf> {
+/// A fresh directory for worker `index`'s job and dumps.
+fn scratch_dir(index: usize) -> Result<PathBuf> {
     let stamp = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map(|d| d.as_nanos())
         .unwrap_or(0);
-    let dir = std::env::temp_dir().join(format!("lamina-count-{}-{stamp}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!(
+        "lamina-count-{}-{index}-{stamp}",
+        std::process::id()
+    ));
     std::fs::create_dir_all(&dir).map_err(|e| io_error(&dir, e))?;
     Ok(dir)
 }

@@ -942,7 +942,14 @@ fn columns_reading(s: &StudyDir) -> Vec<String> {
             .map(|p| &r.runs[p.run])
             .collect()
     };
-    let count = materials(columns[0]).len();
+    let mut names: Vec<&str> = m
+        .points
+        .iter()
+        .map(|p| r.runs[p.run].material.as_str())
+        .collect();
+    names.sort_unstable();
+    names.dedup();
+    let count = names.len();
     if count < 2 {
         return Vec::new();
     }
