@@ -148,12 +148,13 @@ pub fn write_file_atomically(path: &Path, contents: impl AsRef<[u8]>) -> Result<
     })
 }
 
-/// Writes RGBA half-float pixels (rows top to bottom) as an OpenEXR file.
+/// Writes RGBA pixels (rows top to bottom) as a half-float OpenEXR file: each value rounded to
+/// the nearest half float (exact for a half-float render target's frames).
 pub fn write_exr_rgba16f(
     path: &Path,
     width: usize,
     height: usize,
-    pixels: &[[f16; 4]],
+    pixels: &[[f32; 4]],
 ) -> Result<(), ImageIoError> {
     assert_eq!(
         pixels.len(),
@@ -162,7 +163,7 @@ pub fn write_exr_rgba16f(
     );
     write_atomically(path, |temp| {
         exr::prelude::write_rgba_file(temp, width, height, |x, y| {
-            let p = pixels[y * width + x];
+            let p = pixels[y * width + x].map(f16::from_f32);
             (p[0], p[1], p[2], p[3])
         })
         .map_err(|e| e.to_string())
@@ -196,24 +197,24 @@ pub fn check_exposure(exposure_ev: f32) -> Result<(), ImageIoError> {
 }
 
 /// Tone-maps linear radiance to 8-bit sRGB: exposure (in stops), ACES fit, sRGB encoding.
-pub fn tonemap(pixels: &[[f16; 4]], exposure_ev: f32) -> Vec<u8> {
+pub fn tonemap(pixels: &[[f32; 4]], exposure_ev: f32) -> Vec<u8> {
     let scale = exposure_ev.exp2();
     pixels
         .iter()
         .flat_map(|p| {
-            let c = |v: f16| (srgb_encode(aces(v.to_f32() * scale)) * 255.0 + 0.5) as u8;
+            let c = |v: f32| (srgb_encode(aces(v * scale)) * 255.0 + 0.5) as u8;
             [c(p[0]), c(p[1]), c(p[2]), 255]
         })
         .collect()
 }
 
-/// Writes a tone-mapped PNG of RGBA half-float pixels; errs on an exposure outside
+/// Writes a tone-mapped PNG of linear RGBA pixels; errs on an exposure outside
 /// [`EXPOSURE_RANGE_EV`] before writing anything.
 pub fn write_png_tonemapped(
     path: &Path,
     width: usize,
     height: usize,
-    pixels: &[[f16; 4]],
+    pixels: &[[f32; 4]],
     exposure_ev: f32,
 ) -> Result<(), ImageIoError> {
     check_exposure(exposure_ev)?;
@@ -255,7 +256,7 @@ mod tests {
     fn exr_round_trip_is_exact_for_half_floats() {
         let (w, h) = (37, 23);
         // Every pixel a distinct half value, including subnormals, large values and zero.
-        let pixels: Vec<[f16; 4]> = (0..w * h)
+        let pixels: Vec<[f32; 4]> = (0..w * h)
             .map(|i| {
                 let bits = (i as u16).wrapping_mul(97) & 0x7bff;
                 [
@@ -264,6 +265,7 @@ mod tests {
                     f16::from_f32(i as f32 * 0.37),
                     f16::from_f32(1.0),
                 ]
+                .map(f16::to_f32)
             })
             .collect();
         let path = temp_dir("roundtrip").join("image.exr");
@@ -273,7 +275,7 @@ mod tests {
         for (a, b) in pixels.iter().zip(&back.pixels) {
             for c in 0..4 {
                 // f16 → f32 is exact, so equal f32s mean equal half bits.
-                assert_eq!(a[c].to_f32().to_bits(), b[c].to_bits(), "{a:?} vs {b:?}");
+                assert_eq!(a[c].to_bits(), b[c].to_bits(), "{a:?} vs {b:?}");
             }
         }
     }
@@ -309,7 +311,7 @@ mod tests {
     fn exposures_outside_the_range_are_refused_before_writing() {
         let path = temp_dir("exposure").join("never.png");
         for ev in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 24.5, -25.0] {
-            let e = write_png_tonemapped(&path, 1, 1, &[[f16::ONE; 4]], ev).unwrap_err();
+            let e = write_png_tonemapped(&path, 1, 1, &[[1.0; 4]], ev).unwrap_err();
             assert!(e.to_string().contains("-24..=24"), "{e}");
         }
         assert!(!path.exists());
@@ -318,9 +320,7 @@ mod tests {
 
     #[test]
     fn tonemap_is_monotonic_and_bounded() {
-        let ramp: Vec<[f16; 4]> = (0..64)
-            .map(|i| [f16::from_f32(i as f32 * 0.25); 4])
-            .collect();
+        let ramp: Vec<[f32; 4]> = (0..64).map(|i| [i as f32 * 0.25; 4]).collect();
         let out = tonemap(&ramp, 0.0);
         let reds: Vec<u8> = out.chunks(4).map(|p| p[0]).collect();
         assert_eq!(reds[0], 0);

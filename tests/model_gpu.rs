@@ -32,8 +32,7 @@ fn single_conductor_renders_exactly_like_the_ggx_baseline() {
     for model in ["model=tm2", "model=tm6"] {
         let tm = render(&mut renderer, model);
         let mut differing = 0;
-        for (a, b) in ggx.iter().flatten().zip(tm.iter().flatten()) {
-            let (a, b) = (a.to_f32(), b.to_f32());
+        for (&a, &b) in ggx.iter().flatten().zip(tm.iter().flatten()) {
             if a != b {
                 differing += 1;
                 let step = a.abs().max(b.abs()) * 2f32.powi(-10);

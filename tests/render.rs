@@ -44,7 +44,7 @@ fn default_render_is_finite_sphere_differs_and_sky_matches_environment() {
             let (u, v) = environment::equirect_uv(d);
             let background = environment::sample_bilinear(&studio, u, v).value;
             let p = frame.pixels[(y * w + x) as usize];
-            let rendered = [p[0].to_f64(), p[1].to_f64(), p[2].to_f64()];
+            let rendered = [p[0], p[1], p[2]].map(f64::from);
             let miss = miss_distance(eye, dir);
             let (lr, lb) = (luminance(rendered), luminance(background));
             if miss > 1.02 {

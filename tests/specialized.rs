@@ -179,11 +179,7 @@ fn specialized_pipelines_evaluate_what_the_generic_one_does() {
 #[test]
 fn baked_lobes_follow_the_model_between_samples() {
     let gpu = common::gpu();
-    // Midpoints of the finest table's intervals: the farthest points from every size's samples.
-    let probes: Vec<f64> = (0..511)
-        .map(|i| (f64::from(i) + 0.5) / 511.0)
-        .filter(|&mu| mu >= baked::MIN_COS)
-        .collect();
+    let probes = baked::probe_cosines();
     for path in presets() {
         let stack = Stack::load(&path).unwrap();
         let layers = stack.params();

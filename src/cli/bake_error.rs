@@ -5,7 +5,6 @@ use anyhow::{Context, Result};
 use lamina::imageio;
 use lamina::material::resolve_with_variant;
 use lamina::render::baked::{self, DEFAULT_SIZE, IMAGE_FLOOR, SIZE_RANGE, STUDY_SIZES};
-use lamina::render::Renderer;
 use lamina::tables::environment::EnvDesc;
 
 use super::args::EnvArg;
@@ -45,10 +44,11 @@ pub fn run(global: &GlobalArgs, args: &BakeErrorArgs) -> Result<()> {
     let env_path = asset_path(&args.env.env);
     let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
     let gpu = global.open_gpu()?;
-    let mut renderer = Renderer::new(&gpu, &equirect, EnvDesc::default())?;
     let layers = stack.params();
     let rows = baked::error_study(
-        &mut renderer,
+        &gpu,
+        &equirect,
+        EnvDesc::default(),
         variant,
         &layers,
         &args.sizes,
@@ -60,9 +60,11 @@ pub fn run(global: &GlobalArgs, args: &BakeErrorArgs) -> Result<()> {
         stack.name
     );
     println!(
-        "lobes: largest error at 510 view cosines between samples, relative to R; image: \
-         largest relative pixel difference at {0}x{0} (radiance floor {IMAGE_FLOOR})",
-        args.image_size
+        "lobes: largest error at {probes} view cosines between samples (dense in √cos), \
+         relative to R; image: largest relative pixel difference at {side}x{side} in RGBA32F \
+         (radiance floor {IMAGE_FLOOR})",
+        probes = baked::probe_cosines().len(),
+        side = args.image_size
     );
     println!("{:>6}  {:>11}  {:>11}", "size", "lobes", "image");
     for row in &rows {

@@ -15,12 +15,15 @@
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
+use crate::imageio::HdrImage;
 use crate::model::{Evaluation, LayerParams, Lobe};
 use crate::shader::specialize::{BakedShape, MAX_BAKED_LOBES};
+use crate::tables::environment::EnvDesc;
 use crate::variant::{Mode, VariantKey, MAX_LAYERS_LIMIT};
 use crate::vk::{upload_image, Format, Image, ImageDesc, ImageState, ImageView};
 
 use super::eval::GpuEvaluator;
+use super::{Renderer, TargetFormat};
 
 /// Samples per lobe of a baked table unless asked otherwise: the smallest size of the error
 /// study (32, 64, 128, 256) whose largest lobe error over the presets is below 1e-3 —
@@ -207,33 +210,52 @@ pub const STUDY_SIZES: [u32; 4] = [32, 64, 128, 256];
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BakeError {
     pub size: u32,
-    /// [`max_lobe_error`] at the midpoints of a 511-interval grid of the view cosine.
+    /// [`max_lobe_error`] at [`probe_cosines`].
     pub lobe_error: f64,
     /// The largest relative difference of a rendered pixel (any channel) between the baked
     /// pass and the per-pixel pass of the same variant, over pixels whose radiance is at least
-    /// [`IMAGE_FLOOR`] (the render target holds half floats: 4.9e-4 is its resolution).
+    /// [`IMAGE_FLOOR`]. Both are rendered into a float target, so that the difference is the
+    /// baking's and not the rounding of a half-float target (2⁻¹¹ relative).
     pub image_error: f64,
 }
 
 /// Radiances below this count as this in [`BakeError::image_error`].
 pub const IMAGE_FLOOR: f64 = 1e-2;
 
+/// Probes per unit of √μ in [`probe_cosines`]: odd, so that no probe is a sample of a table
+/// whose size is a power of two (sample j of `size` lies at √μ = j/(size − 1)).
+const PROBES: u32 = 4093;
+
+/// The view cosines at which a baked table's lobes are compared with the model's: √μ =
+/// (i + ½)/4093, those with μ ≥ [`MIN_COS`] (the pass clamps below). Dense in √μ like the
+/// samples, they crowd towards grazing, where the silhouette's pixels are and where the model
+/// has its kinks (the FGD table's first texel centre at μ = 0.5/64, a lobe's α reaching 1);
+/// uniform in μ, they would leave μ < 0.002 nearly unprobed.
+pub fn probe_cosines() -> Vec<f64> {
+    (0..PROBES)
+        .map(|i| {
+            let root = (f64::from(i) + 0.5) / f64::from(PROBES);
+            root * root
+        })
+        .filter(|&mu| mu >= MIN_COS)
+        .collect()
+}
+
 /// The baked-table error study of one material: per size, the lobes against the model and the
-/// image against the per-pixel pass (`mode=generic` of `variant`'s other axes), rendered at
-/// `image_size`² by `renderer`.
+/// image against the per-pixel pass (`mode=generic` of `variant`'s other axes), both rendered
+/// at `image_size`² under `equirect` (prefiltered per `env`) into a float target.
 pub fn error_study(
-    renderer: &mut super::Renderer<'_>,
+    gpu: &Gpu,
+    equirect: &HdrImage,
+    env: EnvDesc,
     variant: VariantKey,
     layers: &[LayerParams],
     sizes: &[u32],
     image_size: u32,
 ) -> Result<Vec<BakeError>> {
-    let gpu = renderer.gpu();
+    let mut renderer = Renderer::with_target(gpu, equirect, env, TargetFormat::Float)?;
     let evaluator = evaluator_for(gpu, variant, layers.len())?;
-    let probes: Vec<f64> = (0..511)
-        .map(|i| (f64::from(i) + 0.5) / 511.0)
-        .filter(|&mu| mu >= MIN_COS)
-        .collect();
+    let probes = probe_cosines();
     let exact = evaluator.evaluate(layers, &probes)?;
     let generic = VariantKey {
         mode: Mode::Generic,

@@ -6,7 +6,6 @@
 //! sphere); the CPU side evaluates the oracle's total reflectance at the bins' mean cosines.
 
 use glam::Vec3;
-use half::f16;
 
 use crate::error::Result;
 use crate::gpu::Gpu;
@@ -70,7 +69,7 @@ pub fn gpu(
             let bin = ((cos_theta * bin_count as f64) as usize).min(bin_count - 1);
             let p = frame.pixels[(y * size + x) as usize];
             for (sum, c) in sums[bin].0.iter_mut().zip(p) {
-                *sum += f64::from(f16::to_f32(c));
+                *sum += f64::from(c);
             }
             sums[bin].1 += cos_theta;
             sums[bin].2 += 1;

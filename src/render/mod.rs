@@ -10,4 +10,4 @@ pub mod scene;
 pub mod sheet;
 pub mod sky;
 
-pub use renderer::{RenderedFrame, Renderer, ShadedPhase, COLOR_FORMAT};
+pub use renderer::{RenderedFrame, Renderer, ShadedPhase, TargetFormat};

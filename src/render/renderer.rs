@@ -1,4 +1,5 @@
-//! The frame: sky, then the shaded sphere, into an RGBA16F target that is read back.
+//! The frame: sky, then the shaded sphere, into an RGBA16F (or, on request, RGBA32F) target
+//! that is read back.
 //!
 //! Both draws sit in their own profiler scope; the shaded scope is the number lamina reports
 //! (GPU time of the shaded draw and its fragment-shader invocations).
@@ -17,7 +18,7 @@ use crate::shader::specialize::{shade_spec, SpecializeError};
 use crate::tables::environment::{EnvDesc, Environment};
 use crate::variant::{Mode, Model, VariantKey};
 use crate::vk::{
-    submit_and_wait, Access, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
+    submit_and_wait, texel_bytes, Access, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
     DescriptorSetLayout, Format, GpuProfiler, Image, ImageDesc, ImageState, PipelineLayout,
     Resource, Sampler, SamplerDesc, ScopeTiming, Stages,
 };
@@ -28,15 +29,32 @@ use super::inputs::ShadingInputs;
 use super::scene::{uv_sphere, Camera, Mesh};
 use super::sky::SkyPass;
 
-/// The render target's format: linear HDR, written to EXR as is.
-pub const COLOR_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+/// The render target's format: linear HDR RGBA.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TargetFormat {
+    /// Half floats (RGBA16F): what `lamina render` writes to EXR and the viewer shows.
+    #[default]
+    Half,
+    /// Floats (RGBA32F): for comparisons finer than a half float's rounding (2⁻¹¹ relative).
+    Float,
+}
+
+impl TargetFormat {
+    /// The Vulkan format of the target.
+    pub fn format(self) -> Format {
+        match self {
+            Self::Half => Format::R16G16B16A16_SFLOAT,
+            Self::Float => Format::R32G32B32A32_SFLOAT,
+        }
+    }
+}
 
 /// One rendered image and what the GPU measured while drawing it.
 pub struct RenderedFrame {
     pub width: u32,
     pub height: u32,
-    /// Linear radiance, rows top to bottom.
-    pub pixels: Vec<[f16; 4]>,
+    /// Linear radiance, rows top to bottom (a half-float target's values, widened exactly).
+    pub pixels: Vec<[f32; 4]>,
     pub sky: ScopeTiming,
     pub shaded: ScopeTiming,
 }
@@ -61,11 +79,23 @@ pub struct Renderer<'g> {
     vertices: Buffer,
     indices: Buffer,
     index_count: u32,
+    target: TargetFormat,
     pub camera: Camera,
 }
 
 impl<'g> Renderer<'g> {
+    /// A renderer into a half-float target.
     pub fn new(gpu: &'g Gpu, equirect: &HdrImage, env: EnvDesc) -> Result<Self> {
+        Self::with_target(gpu, equirect, env, TargetFormat::Half)
+    }
+
+    /// A renderer into a `target` target: every pipeline it builds writes that format.
+    pub fn with_target(
+        gpu: &'g Gpu,
+        equirect: &HdrImage,
+        env: EnvDesc,
+        target: TargetFormat,
+    ) -> Result<Self> {
         let device = &gpu.device;
         let environment = Environment::build(gpu, equirect, env)?;
         let inputs = ShadingInputs::new(gpu)?;
@@ -83,7 +113,7 @@ impl<'g> Renderer<'g> {
             "scene",
         )?;
         let sampler = Sampler::new(device, SamplerDesc::linear_clamp(), "scene")?;
-        let sky = SkyPass::new(gpu, &layout, COLOR_FORMAT)?;
+        let sky = SkyPass::new(gpu, &layout, target.format())?;
         let mesh = uv_sphere(64, 128);
         let vertices = Buffer::with_data(
             device,
@@ -108,6 +138,7 @@ impl<'g> Renderer<'g> {
             vertices,
             indices,
             index_count: mesh.indices.len() as u32,
+            target,
             camera: Camera::default(),
         })
     }
@@ -115,6 +146,11 @@ impl<'g> Renderer<'g> {
     /// The device this renderer draws on.
     pub fn gpu(&self) -> &'g Gpu {
         self.gpu
+    }
+
+    /// The format of the targets this renderer draws into.
+    pub fn target(&self) -> TargetFormat {
+        self.target
     }
 
     /// Replaces the drawn mesh (the sphere by default).
@@ -167,8 +203,8 @@ impl<'g> Renderer<'g> {
         }
         if !variant.mode.per_material() {
             let spec = shade_spec(variant, layers, None).map_err(specialize)?;
-            let pass =
-                ForwardPass::new(self.gpu, &self.layout, COLOR_FORMAT, variant, &spec, None)?;
+            let format = self.target.format();
+            let pass = ForwardPass::new(self.gpu, &self.layout, format, variant, &spec, None)?;
             return Ok(pass);
         }
         let baked = if variant.mode == Mode::Baked {
@@ -184,7 +220,7 @@ impl<'g> Renderer<'g> {
         ForwardPass::new(
             self.gpu,
             &self.layout,
-            COLOR_FORMAT,
+            self.target.format(),
             variant,
             &spec,
             Some(PassMaterial {
@@ -246,15 +282,16 @@ impl<'g> Renderer<'g> {
             .write(0, Resource::Buffer(&uniforms))
             .write(1, Resource::Sampled(&self.environment.view, &self.sampler));
 
+        let format = self.target.format();
         let target = Image::new(
             device,
-            ImageDesc::render_target(COLOR_FORMAT, width, height),
+            ImageDesc::render_target(format, width, height),
             "render target",
         )?;
         let target_view = target.view("render target")?;
         let readback = Buffer::new(
             device,
-            BufferDesc::readback(u64::from(width) * u64::from(height) * 8),
+            BufferDesc::readback(u64::from(width) * u64::from(height) * texel_bytes(format)),
             "render readback",
         )?;
         let mut profiler = GpuProfiler::new(device, 2, "frame")?;
@@ -317,7 +354,14 @@ impl<'g> Renderer<'g> {
         Ok(RenderedFrame {
             width,
             height,
-            pixels: readback.read::<[f16; 4]>(),
+            pixels: match self.target {
+                TargetFormat::Half => readback
+                    .read::<[f16; 4]>()
+                    .into_iter()
+                    .map(|p| p.map(f16::to_f32))
+                    .collect(),
+                TargetFormat::Float => readback.read::<[f32; 4]>(),
+            },
             sky,
             shaded,
         })

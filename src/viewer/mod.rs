@@ -28,8 +28,6 @@ use winit::window::{Window, WindowId};
 
 use std::sync::mpsc::{channel, Receiver, Sender};
 
-use half::f16;
-
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::imageio;
@@ -172,7 +170,7 @@ struct App<'g> {
     /// The tone-mapped scene, shown by the central panel.
     texture: Option<egui::TextureHandle>,
     /// The last scene frame (linear), kept to re-tone-map when the exposure changes.
-    last_frame: Option<(u32, u32, Vec<[f16; 4]>, f32)>,
+    last_frame: Option<(u32, u32, Vec<[f32; 4]>, f32)>,
     requests: Option<Sender<Request>>,
     replies: Receiver<Reply>,
     /// A request was sent and its frame (or failure) has not come back.

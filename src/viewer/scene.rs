@@ -5,8 +5,6 @@
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, Sender};
 
-use half::f16;
-
 use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::imageio;
@@ -57,7 +55,7 @@ pub enum Reply {
 pub struct Frame {
     pub width: u32,
     pub height: u32,
-    pub pixels: Vec<[f16; 4]>,
+    pub pixels: Vec<[f32; 4]>,
     pub shaded_ms: f64,
     pub fragment_invocations: Option<u64>,
 }
