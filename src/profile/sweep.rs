@@ -832,16 +832,13 @@ fn bake_errors(
             baked.push(p);
         }
     }
-    let mut renderer = crate::render::Renderer::new(
-        gpu,
-        equirect,
-        crate::tables::environment::EnvDesc::default(),
-    )?;
     let mut out = Vec::with_capacity(baked.len());
     for (i, p) in baked.iter().enumerate() {
         progress("bake error", i, baked.len());
         let errors = crate::render::baked::error_study(
-            &mut renderer,
+            gpu,
+            equirect,
+            crate::tables::environment::EnvDesc::default(),
             p.case.variant,
             &p.case.stack.params(),
             sizes,
