@@ -329,6 +329,6 @@ fn every_committed_sweep_file_expands() {
     assert_eq!(specialization[0].targets[0].material, "varnished gold");
     assert_eq!(
         specialization[0].bake_error,
-        Some((vec![32, 64, 128, 256], 128))
+        Some((vec![32, 64, 128, 256, 512], 128))
     );
 }

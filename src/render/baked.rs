@@ -26,11 +26,17 @@ use super::eval::GpuEvaluator;
 use super::{Renderer, TargetFormat};
 
 /// Samples per lobe of a baked table unless asked otherwise: the smallest size of the error
-/// study (32, 64, 128, 256) whose largest lobe error over the presets is below 1e-3 —
-/// 6.6e-4 (`absorbing-film`; 128 samples: 2.1e-3), `cargo test --test specialized baked --
-/// --nocapture` prints the table. The errors come from the model's kinks near grazing (the
-/// FGD table's first texel, a lobe's α reaching 1), so they fall unevenly with the size.
-pub const DEFAULT_SIZE: u32 = 256;
+/// study ([`STUDY_SIZES`]) whose largest lobe and image errors over the presets are both
+/// within 1e-3 — at 512, 4.2e-4 and 3.9e-4; at 256, 1.35e-3 (`lacquered-copper`'s lobes) and
+/// 2.2e-3 (`varnished-gold`'s image). `lamina sweep profiling/sweeps/specialization.toml`
+/// tabulates them; `cargo test --test specialized baked -- --nocapture` prints the lobes. The
+/// errors come from the model's kinks near grazing (the FGD table's first texel, a lobe's α
+/// reaching 1 near μ = 0.07), so they fall unevenly with the size: where a kink falls inside
+/// a table interval decides. The image is the more sensitive there: at the α = 1 kink a
+/// roughness error moves the prefiltered radiance 4–11 times more than the lobe metric's
+/// `share·|Δ√α|` assumes (the mip, between the cube's two coarsest levels, and the dominant
+/// direction's blend both change fastest there).
+pub const DEFAULT_SIZE: u32 = 512;
 
 /// The sizes a baked table may have.
 pub const SIZE_RANGE: std::ops::RangeInclusive<u32> = 2..=4096;
@@ -204,7 +210,7 @@ pub fn evaluator_for(gpu: &Gpu, variant: VariantKey, layers: usize) -> Result<Gp
 }
 
 /// The table sizes the error study compares (issue 11 §5).
-pub const STUDY_SIZES: [u32; 4] = [32, 64, 128, 256];
+pub const STUDY_SIZES: [u32; 5] = [32, 64, 128, 256, 512];
 
 /// A baked table of one size against the per-pixel model.
 #[derive(Clone, Copy, Debug, PartialEq)]
