@@ -53,22 +53,36 @@ pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
         None
     };
     let started = std::time::Instant::now();
-    let mut written = Vec::new();
+    // Every study timed first, then all the counts in one pool of workers (each worker starts
+    // once and compiles each shader under valgrind once for the whole suite).
+    let mut timed = Vec::with_capacity(list.len());
     for (k, study) in list.iter().enumerate() {
         let bar = progress_bar(&format!("[{}/{}] {}", k + 1, list.len(), study.name));
-        let (results, meta) = sweep::run(
+        timed.push(sweep::time(
             &gpu,
             &equirect,
             study,
-            setup.as_ref(),
-            |what, done, total| {
+            &mut |what, done, total| {
                 bar.set_message(what.to_owned());
                 bar.set_length(total as u64);
                 bar.set_position(done as u64);
             },
-        )?;
+        )?);
         bar.finish_and_clear();
         check_validation(&gpu)?;
+    }
+    if let Some(setup) = &setup {
+        let bar = progress_bar("instructions (callgrind)");
+        bar.set_message("counted");
+        sweep::count(&list, &mut timed, setup, |done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        })?;
+        bar.finish_and_clear();
+    }
+    let mut written = Vec::new();
+    for (study, timed) in list.iter().zip(timed) {
+        let (results, meta) = sweep::finish(study, timed, setup.is_some());
         let dir = dir_of(study);
         let charts = sweep::write(&dir, study, &results, &meta)?;
         println!("\n== {} ({})", study.title, study.name);

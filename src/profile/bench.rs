@@ -64,6 +64,9 @@ impl BenchConfig {
     }
 }
 
+/// [`Run::executable_stats`] of a device without `VK_KHR_pipeline_executable_properties`.
+pub const UNSUPPORTED: &str = "unsupported";
+
 #[derive(Debug, Serialize, Deserialize)]
 pub struct DeviceInfo {
     pub name: String,
@@ -113,7 +116,9 @@ pub struct Run {
     /// from the same run.
     #[serde(default)]
     pub instructions_per_pixel_ratio: Option<f64>,
-    /// `VK_KHR_pipeline_executable_properties` statistics where offered; `null` otherwise.
+    /// `VK_KHR_pipeline_executable_properties` statistics (registers, spills, code size … as
+    /// the driver names them) where the device offers the extension, else `"unsupported"`
+    /// (lavapipe); `null` in results written before the distinction.
     pub executable_stats: Option<serde_json::Value>,
 }
 
@@ -226,9 +231,10 @@ pub fn run(
     let executable_stats = passes
         .iter()
         .map(|p| {
-            Ok(p.pipeline
-                .executable_statistics()?
-                .map(|s| serde_json::to_value(s).expect("statistics serialise")))
+            Ok(Some(match p.pipeline.executable_statistics()? {
+                Some(s) => serde_json::to_value(s).expect("statistics serialise"),
+                None => serde_json::Value::from(UNSUPPORTED),
+            }))
         })
         .collect::<Result<Vec<_>>>()?;
     let report = &gpu.device.report;

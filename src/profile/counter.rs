@@ -213,7 +213,26 @@ pub fn add_counts(
     sizes: CounterSizes,
     progress: impl FnMut(usize, usize),
 ) -> Result<()> {
-    let scene = results.scene;
+    add_counts_to_all(&mut [(results, cases)], setup, sizes, progress)
+}
+
+/// [`add_counts`] for several result sets at once, in one pool of workers (a suite's studies:
+/// each worker starts once and compiles each shader once). Every set must have the same scene.
+pub fn add_counts_to_all(
+    batches: &mut [(&mut Results, &[Case])],
+    setup: &CounterSetup,
+    sizes: CounterSizes,
+    progress: impl FnMut(usize, usize),
+) -> Result<()> {
+    let Some(scene) = batches.first().map(|(r, _)| r.scene) else {
+        return Ok(());
+    };
+    if let Some((other, _)) = batches.iter().find(|(r, _)| r.scene != scene) {
+        return Err(Error::Unsupported(format!(
+            "one count covers one scene; got {scene} and {}",
+            other.scene
+        )));
+    }
     // The renderers of the bench and of the worker look through the default camera.
     let camera = Camera::default();
     let shaded_pixels = sizes
@@ -227,33 +246,44 @@ pub fn add_counts(
             sizes.small, sizes.large
         )));
     }
+    let cases: Vec<Case> = batches
+        .iter()
+        .flat_map(|(_, cases)| cases.iter().cloned())
+        .collect();
     let counts = count_instructions(
         &CountRequest {
             exe: &setup.exe,
             global_args: setup.global_args.clone(),
             env_map: &setup.env_map,
-            cases,
+            cases: &cases,
             scene,
             sizes: &sizes.both(),
         },
         progress,
     )?;
     let added_pixels = (large_pixels - small_pixels) as f64;
-    for (run, count) in results.runs.iter_mut().zip(counts) {
-        let [small, large] = count[..] else {
-            unreachable!("count_instructions answers one count per size");
-        };
-        run.instructions = Some(small.jit);
-        run.instructions_total = Some(small.total);
-        run.instructions_large = Some(large.jit);
-        run.instructions_total_large = Some(large.total);
-        run.instructions_per_pixel = Some((large.jit as f64 - small.jit as f64) / added_pixels);
+    let mut counts = counts.into_iter();
+    for (results, cases) in batches.iter_mut() {
+        for (run, count) in results
+            .runs
+            .iter_mut()
+            .zip(counts.by_ref().take(cases.len()))
+        {
+            let [small, large] = count[..] else {
+                unreachable!("count_instructions answers one count per size");
+            };
+            run.instructions = Some(small.jit);
+            run.instructions_total = Some(small.total);
+            run.instructions_large = Some(large.jit);
+            run.instructions_total_large = Some(large.total);
+            run.instructions_per_pixel = Some((large.jit as f64 - small.jit as f64) / added_pixels);
+        }
+        results.counter = Some(CounterInfo {
+            sizes: sizes.both().map(|s| [s.width, s.height]),
+            shaded_pixels,
+        });
+        results.set_per_pixel_ratios();
     }
-    results.counter = Some(CounterInfo {
-        sizes: sizes.both().map(|s| [s.width, s.height]),
-        shaded_pixels,
-    });
-    results.set_per_pixel_ratios();
     Ok(())
 }
 
@@ -274,20 +304,23 @@ pub struct CountRequest<'a> {
 /// `progress(done, total)` follows the workers. Every case gets a count at every size or the
 /// whole call fails.
 ///
-/// The cases are split in consecutive runs over one worker per core (each worker runs
-/// llvmpipe on one thread, `LP_NUM_THREADS=0`), side by side: most of a worker's time is
-/// llvmpipe compiling shaders under valgrind, which the count leaves out. A count does not
-/// depend on the worker that takes it (the gate test counts one case twice).
+/// The cases are shared out over one worker per core (each worker runs llvmpipe on one
+/// thread, `LP_NUM_THREADS=0`), side by side: most of a worker's time is llvmpipe compiling
+/// shaders under valgrind, which the count leaves out, so the cases of one shader go to one
+/// worker ([`shader_groups`]). A count does not depend on the worker that takes it (the gate
+/// test counts one case twice).
 pub fn count_instructions(
     request: &CountRequest<'_>,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<Vec<Vec<Counts>>> {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let workers = cores.min(request.cases.len()).max(1);
-    let chunks: Vec<&[Case]> = request
-        .cases
-        .chunks(request.cases.len().div_ceil(workers).max(1))
+    let shares = shader_groups(request.cases, workers);
+    let owned: Vec<Vec<Case>> = shares
+        .iter()
+        .map(|share| share.iter().map(|&i| request.cases[i].clone()).collect())
         .collect();
+    let chunks: Vec<&[Case]> = owned.iter().map(Vec::as_slice).collect();
     let total = request.cases.len() * request.sizes.len();
     let (tx, rx) = std::sync::mpsc::channel::<(usize, usize)>();
     let outcomes: Vec<Result<Vec<Vec<Counts>>>> = std::thread::scope(|scope| {
@@ -327,11 +360,44 @@ pub fn count_instructions(
             .map(|h| h.join().expect("a counter thread only returns"))
             .collect()
     });
-    let mut counts = Vec::with_capacity(request.cases.len());
-    for outcome in outcomes {
-        counts.extend(outcome?);
+    let mut counts = vec![Vec::new(); request.cases.len()];
+    for (share, outcome) in shares.iter().zip(outcomes) {
+        for (&i, count) in share.iter().zip(outcome?) {
+            counts[i] = count;
+        }
     }
     Ok(counts)
+}
+
+/// The indices of `cases` shared out over `workers`: the cases of one shader (a generic
+/// variant, or a per-material variant on one material) together, the largest groups first,
+/// each to the worker with the fewest cases so far.
+fn shader_groups(cases: &[Case], workers: usize) -> Vec<Vec<usize>> {
+    let shader = |c: &Case| {
+        if c.variant.mode.per_material() {
+            format!("{}|{}", c.variant, c.stack.name)
+        } else {
+            c.variant.to_string()
+        }
+    };
+    let mut groups: Vec<(String, Vec<usize>)> = Vec::new();
+    for (i, case) in cases.iter().enumerate() {
+        let key = shader(case);
+        match groups.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, members)) => members.push(i),
+            None => groups.push((key, vec![i])),
+        }
+    }
+    groups.sort_by_key(|(_, members)| std::cmp::Reverse(members.len()));
+    let mut shares: Vec<Vec<usize>> = vec![Vec::new(); workers.max(1)];
+    for (_, members) in groups {
+        let emptiest = (0..shares.len())
+            .min_by_key(|&w| shares[w].len())
+            .expect("at least one worker");
+        shares[emptiest].extend(members);
+    }
+    shares.retain(|s| !s.is_empty());
+    shares
 }
 
 /// Writes the worker's job file (the cases' variants and stacks) into `dir`.

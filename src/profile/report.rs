@@ -369,6 +369,9 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
         relative(&s.dir, out_dir),
     );
     let _ = writeln!(md, "Command: `{}`\n", r.command);
+    if let Some(line) = executable_stats_line(r) {
+        let _ = writeln!(md, "{line}\n");
+    }
     let base = r
         .runs
         .iter()
@@ -492,6 +495,45 @@ fn one_axis_by_material(m: &StudyMeta) -> Option<usize> {
         [axis] => Some(axis),
         _ => None,
     }
+}
+
+/// What the runs say of the driver's pipeline-executable statistics: unsupported, or which
+/// statistics each run's results.json holds.
+fn executable_stats_line(r: &Results) -> Option<String> {
+    let stats: Vec<&serde_json::Value> = r
+        .runs
+        .iter()
+        .filter_map(|run| run.executable_stats.as_ref())
+        .collect();
+    if stats.is_empty() {
+        return None;
+    }
+    if stats
+        .iter()
+        .all(|s| s.as_str() == Some(super::bench::UNSUPPORTED))
+    {
+        return Some(format!(
+            "Pipeline-executable statistics (registers, spills, code size): unsupported — {} \
+             does not offer `VK_KHR_pipeline_executable_properties`.",
+            r.device.name
+        ));
+    }
+    let mut names: Vec<String> = Vec::new();
+    for s in &stats {
+        for exe in s.as_array().into_iter().flatten() {
+            for stat in exe["statistics"].as_array().into_iter().flatten() {
+                if let Some(name) = stat["name"].as_str() {
+                    if !names.iter().any(|n| n == name) {
+                        names.push(name.to_string());
+                    }
+                }
+            }
+        }
+    }
+    Some(format!(
+        "Pipeline-executable statistics per run in results.json (`executable_stats`): {}.",
+        names.join(", ")
+    ))
 }
 
 /// Studies of several materials over one other axis: each material's ratios to its ggx

@@ -755,7 +755,8 @@ pub struct PointMeta {
     pub coords: Vec<String>,
 }
 
-/// Runs one study: timings interleaved on `gpu`, then (when asked) instruction counts.
+/// Runs one study: timings interleaved on `gpu`, the baked tables' errors, then (when asked)
+/// instruction counts.
 pub fn run(
     gpu: &crate::gpu::Gpu,
     equirect: &crate::imageio::HdrImage,
@@ -763,6 +764,34 @@ pub fn run(
     counter: Option<&CounterSetup>,
     mut progress: impl FnMut(&str, usize, usize),
 ) -> Result<(super::bench::Results, StudyMeta)> {
+    let mut timed = [time(gpu, equirect, study, &mut progress)?];
+    if let Some(setup) = counter {
+        count(
+            std::slice::from_ref(study),
+            &mut timed,
+            setup,
+            |done, total| progress("counted", done, total),
+        )?;
+    }
+    let [timed] = timed;
+    Ok(finish(study, timed, counter.is_some()))
+}
+
+/// A study timed and its baked tables measured; its instructions not counted yet.
+pub struct Timed {
+    pub results: super::bench::Results,
+    /// The runs' cases in order (the added ggx baselines, then the study's points).
+    pub cases: Vec<Case>,
+    pub bake_error: Vec<MaterialBakeError>,
+}
+
+/// The first part of [`run`]: the timings, interleaved on `gpu`, and the bake-error study.
+pub fn time(
+    gpu: &crate::gpu::Gpu,
+    equirect: &crate::imageio::HdrImage,
+    study: &Study,
+    progress: &mut impl FnMut(&str, usize, usize),
+) -> Result<Timed> {
     let config = super::bench::BenchConfig {
         cases: study.points.iter().map(|p| p.case.clone()).collect(),
         scene: study.scene,
@@ -771,23 +800,73 @@ pub fn run(
         frames: study.frames,
         warmup: study.warmup,
     };
-    let all = config.with_baselines();
-    let baselines = all.len() - study.points.len();
-    let mut results = super::bench::run(gpu, equirect, &config, |done, total| {
+    let cases = config.with_baselines();
+    let results = super::bench::run(gpu, equirect, &config, |done, total| {
         progress("frames", done as usize, total as usize)
     })?;
-    if let (Some(sizes), Some(setup)) = (study.counter, counter) {
-        super::counter::add_counts(&mut results, setup, &all, sizes, |done, total| {
-            progress("counted", done, total)
-        })?;
-    }
-    let counted = study.counter.filter(|_| counter.is_some());
     let bake_error = match &study.bake_error {
         Some((sizes, image_size)) => {
-            bake_errors(gpu, equirect, study, sizes, *image_size, &mut progress)?
+            bake_errors(gpu, equirect, study, sizes, *image_size, progress)?
         }
         None => Vec::new(),
     };
+    Ok(Timed {
+        results,
+        cases,
+        bake_error,
+    })
+}
+
+/// Counts the instructions of every timed study that asks for them, in one pool of workers
+/// per scene and counter sizes (so a suite starts its workers and compiles each shader under
+/// valgrind once, not once per study). `studies[i]` was timed into `timed[i]`.
+pub fn count(
+    studies: &[Study],
+    timed: &mut [Timed],
+    setup: &CounterSetup,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<()> {
+    let mut keys: Vec<(Scene, CounterSizes)> = Vec::new();
+    for s in studies {
+        if let Some(sizes) = s.counter {
+            if !keys.contains(&(s.scene, sizes)) {
+                keys.push((s.scene, sizes));
+            }
+        }
+    }
+    let total: usize = studies
+        .iter()
+        .zip(timed.iter())
+        .filter(|(s, _)| s.counter.is_some())
+        .map(|(_, t)| t.cases.len() * 2)
+        .sum();
+    let mut before = 0;
+    for (scene, sizes) in keys {
+        let mut batches: Vec<(&mut super::bench::Results, &[Case])> = studies
+            .iter()
+            .zip(timed.iter_mut())
+            .filter(|(s, _)| s.scene == scene && s.counter == Some(sizes))
+            .map(|(_, t)| (&mut t.results, t.cases.as_slice()))
+            .collect();
+        let here: usize = batches.iter().map(|(_, c)| c.len() * 2).sum();
+        super::counter::add_counts_to_all(&mut batches, setup, sizes, |done, _| {
+            progress(before + done, total)
+        })?;
+        before += here;
+    }
+    Ok(())
+}
+
+/// The last part of [`run`]: the study's metadata beside its results (counted when `counted`
+/// and the study asks for counts).
+pub fn finish(study: &Study, timed: Timed, counted: bool) -> (super::bench::Results, StudyMeta) {
+    let Timed {
+        results,
+        cases,
+        bake_error,
+    } = timed;
+    let baselines = cases.len() - study.points.len();
+    let counted = study.counter.filter(|_| counted);
     let meta = StudyMeta {
         name: study.name.clone(),
         title: study.title.clone(),
@@ -811,7 +890,7 @@ pub fn run(
         targets: study.targets.clone(),
         bake_error,
     };
-    Ok((results, meta))
+    (results, meta)
 }
 
 /// The baked-table error study of every material the study bakes (its first `mode=baked` run
