@@ -149,12 +149,8 @@ fn instructions_ratio(run: &Run, base: Option<&Run>) -> Option<f64> {
 
 /// The ggx baseline `run` is divided by: the one on its material, else the study's first.
 fn baseline_of<'a>(r: &'a Results, run: &Run) -> Option<&'a Run> {
-    let ggx = |b: &&Run| b.variant.starts_with("model=ggx");
-    r.runs
-        .iter()
-        .filter(ggx)
-        .find(|b| b.material == run.material)
-        .or_else(|| r.runs.iter().find(ggx))
+    r.baseline_of(&run.material)
+        .or_else(|| r.runs.iter().find(|b| b.variant.starts_with("model=ggx")))
 }
 
 /// `a` over `b` on the study's main basis: JIT instructions per pixel, else per draw, else
@@ -486,15 +482,39 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
     }
 }
 
-/// The index of a study's one axis besides `material` (an axis or the `materials` list).
-fn one_axis_by_material(m: &StudyMeta) -> Option<usize> {
+/// A study of materials over one other axis: that axis's index, the materials and the axis's
+/// values, each in first-seen order.
+struct MaterialGrid<'a> {
+    axis: usize,
+    materials: Vec<&'a str>,
+    columns: Vec<&'a str>,
+}
+
+/// The grid of a study whose one axis besides `material` (an axis or the `materials` list) is
+/// crossed with at least two materials.
+fn material_grid<'a>(r: &'a Results, m: &'a StudyMeta) -> Option<MaterialGrid<'a>> {
     let others: Vec<usize> = (0..m.axes.len())
         .filter(|&i| m.axes[i] != "material")
         .collect();
-    match others[..] {
-        [axis] => Some(axis),
-        _ => None,
+    let [axis] = others[..] else {
+        return None;
+    };
+    let mut materials: Vec<&str> = Vec::new();
+    let mut columns: Vec<&str> = Vec::new();
+    for p in &m.points {
+        let material = r.runs[p.run].material.as_str();
+        if !materials.contains(&material) {
+            materials.push(material);
+        }
+        if !columns.contains(&p.coords[axis].as_str()) {
+            columns.push(&p.coords[axis]);
+        }
     }
+    (materials.len() >= 2).then_some(MaterialGrid {
+        axis,
+        materials,
+        columns,
+    })
 }
 
 /// What the runs say of the driver's pipeline-executable statistics: unsupported, or which
@@ -540,23 +560,14 @@ fn executable_stats_line(r: &Results) -> Option<String> {
 /// baseline side by side (material rows, the axis's values as columns).
 fn pivot_section(md: &mut String, s: &StudyDir) {
     let (r, m) = (&s.results, &s.meta);
-    let Some(axis) = one_axis_by_material(m) else {
+    let Some(MaterialGrid {
+        axis,
+        materials,
+        columns,
+    }) = material_grid(r, m)
+    else {
         return;
     };
-    let mut materials: Vec<&str> = Vec::new();
-    let mut columns: Vec<&str> = Vec::new();
-    for p in &m.points {
-        let material = r.runs[p.run].material.as_str();
-        if !materials.contains(&material) {
-            materials.push(material);
-        }
-        if !columns.contains(&p.coords[axis].as_str()) {
-            columns.push(&p.coords[axis]);
-        }
-    }
-    if materials.len() < 2 {
-        return;
-    }
     let basis = if per_pixel(r) {
         "JIT instructions per shaded pixel"
     } else if r.runs.iter().any(|run| run.instructions.is_some()) {
@@ -599,10 +610,7 @@ fn target_ratio<'a>(s: &'a StudyDir, t: &Target) -> Option<(f64, &'static str, &
     let run = on(&t.matches)?;
     let against = match &t.against {
         Some(pattern) => on(pattern)?,
-        None => r
-            .runs
-            .iter()
-            .find(|b| b.variant.starts_with("model=ggx") && b.material == t.material)?,
+        None => r.baseline_of(&t.material)?,
     };
     let (ratio, basis) = main_ratio(r, run, against);
     Some((ratio, basis, run, against))
@@ -834,10 +842,7 @@ fn reading(s: &StudyDir) -> Vec<String> {
         if run.variant.starts_with("model=ggx") {
             return None;
         }
-        let base = r
-            .runs
-            .iter()
-            .find(|b| b.variant.starts_with("model=ggx") && b.material == run.material)?;
+        let base = r.baseline_of(&run.material)?;
         let (o, b) = (overhead(run)?, overhead(base)?);
         // A rebuild happens at every draw, so it shows at both counted sizes; a one-off
         // excess at one size (driver work at a draw, seen since the material left the uniform
@@ -981,15 +986,14 @@ fn dilution(r: &Results) -> Option<String> {
 /// the materials, and how the costliest column compares with each per-material mode.
 fn columns_reading(s: &StudyDir) -> Vec<String> {
     let (r, m) = (&s.results, &s.meta);
-    let Some(axis) = one_axis_by_material(m) else {
+    let Some(MaterialGrid {
+        axis,
+        materials: names,
+        columns,
+    }) = material_grid(r, m)
+    else {
         return Vec::new();
     };
-    let mut columns: Vec<&str> = Vec::new();
-    for p in &m.points {
-        if !columns.contains(&p.coords[axis].as_str()) {
-            columns.push(&p.coords[axis]);
-        }
-    }
     let materials = |column: &str| -> Vec<&Run> {
         m.points
             .iter()
@@ -997,17 +1001,7 @@ fn columns_reading(s: &StudyDir) -> Vec<String> {
             .map(|p| &r.runs[p.run])
             .collect()
     };
-    let mut names: Vec<&str> = m
-        .points
-        .iter()
-        .map(|p| r.runs[p.run].material.as_str())
-        .collect();
-    names.sort_unstable();
-    names.dedup();
     let count = names.len();
-    if count < 2 {
-        return Vec::new();
-    }
     let to_ggx = |run: &Run| Some(main_ratio(r, run, baseline_of(r, run)?).0);
     let mut lines = Vec::new();
     let mut medians = Vec::new();
