@@ -331,4 +331,46 @@ fn every_committed_sweep_file_expands() {
         specialization[0].bake_error,
         Some((vec![32, 64, 128, 256, 512], 128))
     );
+    // The real-GPU suite: the same studies, at the talk's resolution, timed only.
+    let (gpu, suite) = sweep::load(&dir.join("reproduce-gpu.toml")).unwrap();
+    assert!(suite);
+    let names = |list: &[sweep::Study]| list.iter().map(|s| s.name.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&gpu), names(&studies));
+    for s in &gpu {
+        assert_eq!((s.width, s.height), (1920, 1080), "{}", s.name);
+        assert_eq!(s.counter, None, "{}: nothing to count on a GPU", s.name);
+    }
+}
+
+#[test]
+fn a_suite_runs_the_studies_named_and_refuses_others() {
+    let dir = common::scratch_dir("sweep-select");
+    let suite = common::repo_path("profiling/sweeps/reproduce.toml");
+    let suite = suite.to_str().unwrap();
+    let out = lamina(
+        &[
+            "sweep",
+            suite,
+            "--study",
+            "tir",
+            "--study",
+            "fgd",
+            "--dry-run",
+        ],
+        &dir,
+    );
+    let plan = text(&out.stdout);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(plan.contains(": 2 studies,"), "{plan}");
+    assert!(plan.contains("tir:") && plan.contains("fgd:"), "{plan}");
+    assert!(!plan.contains("growth"), "{plan}");
+
+    let out = lamina(&["sweep", suite, "--study", "nope", "--dry-run"], &dir);
+    let err = text(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("--study nope") && err.contains("reproduce.toml") && err.contains("growth"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
 }

@@ -47,6 +47,9 @@ pub struct EnvArg {
 pub enum CounterArg {
     /// Instructions executed by lavapipe while it runs the shaded draw (valgrind callgrind).
     Instructions,
+    /// No counting, whatever the sweep files ask (e.g. on a GPU, where there is nothing to
+    /// count).
+    None,
 }
 
 /// `--exposure EV`: a number of stops in [`imageio::EXPOSURE_RANGE_EV`].

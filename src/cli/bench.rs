@@ -86,7 +86,7 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
     let mut results = bench::run(&gpu, &equirect, &config, follow(&bar))?;
     bar.finish_and_clear();
     check_validation(&gpu)?;
-    if args.counter.is_some() {
+    if args.counter == Some(CounterArg::Instructions) {
         let setup = CounterSetup::for_device(&gpu, &env_path)?;
         let bar = progress_bar("counted (callgrind)");
         counter::add_counts(

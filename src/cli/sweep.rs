@@ -1,7 +1,7 @@
 //! `lamina sweep`: a study file or a suite (`lamina::profile::sweep`) — its cases listed, run
 //! interleaved, written as results, charts and a report.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use lamina::imageio;
@@ -21,6 +21,9 @@ pub struct SweepArgs {
     /// Count instructions too (overrides the sweep file's `counter`).
     #[arg(long, value_enum)]
     counter: Option<CounterArg>,
+    /// Run only these studies of a suite (repeatable; names as the suite's plan lists them).
+    #[arg(long, value_name = "NAME")]
+    study: Vec<String>,
     #[command(flatten)]
     env: EnvArg,
     /// Check and expand the file, print the cases, and stop before any GPU work.
@@ -30,8 +33,15 @@ pub struct SweepArgs {
 
 pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
     let (mut list, suite) = sweep::load(&args.file)?;
-    if let Some(CounterArg::Instructions) = args.counter {
-        list.iter_mut().for_each(sweep::Study::count_instructions);
+    if !args.study.is_empty() {
+        select_studies(&args.file, &mut list, &args.study)?;
+    }
+    match args.counter {
+        Some(CounterArg::Instructions) => {
+            list.iter_mut().for_each(sweep::Study::count_instructions)
+        }
+        Some(CounterArg::None) => list.iter_mut().for_each(|s| s.counter = None),
+        None => {}
     }
     let dir_of = |s: &sweep::Study| sweep::output_dir(&args.out, s, suite);
     print_plan(args, &list, &dir_of);
@@ -58,6 +68,7 @@ pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
     let mut timed = Vec::with_capacity(list.len());
     for (k, study) in list.iter().enumerate() {
         let bar = progress_bar(&format!("[{}/{}] {}", k + 1, list.len(), study.name));
+        let study_started = std::time::Instant::now();
         timed.push(sweep::time(
             &gpu,
             &equirect,
@@ -70,8 +81,14 @@ pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
         )?);
         bar.finish_and_clear();
         check_validation(&gpu)?;
+        println!(
+            "  timed {} in {:.1} s",
+            study.name,
+            study_started.elapsed().as_secs_f64()
+        );
     }
     if let Some(setup) = &setup {
+        let count_started = std::time::Instant::now();
         let bar = progress_bar("instructions (callgrind)");
         bar.set_message("counted");
         sweep::count(&list, &mut timed, setup, |done, total| {
@@ -79,6 +96,10 @@ pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
             bar.set_position(done as u64);
         })?;
         bar.finish_and_clear();
+        println!(
+            "  counted instructions in {:.1} s",
+            count_started.elapsed().as_secs_f64()
+        );
     }
     let mut written = Vec::new();
     for (study, timed) in list.iter().zip(timed) {
@@ -102,6 +123,21 @@ pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
         started.elapsed().as_secs_f64(),
         report_path.display()
     );
+    Ok(())
+}
+
+/// Keeps the studies `names` asks for, in the suite's order; a name the suite lacks is an
+/// error that lists the suite's studies.
+fn select_studies(file: &Path, list: &mut Vec<sweep::Study>, names: &[String]) -> Result<()> {
+    if let Some(missing) = names.iter().find(|n| !list.iter().any(|s| &s.name == *n)) {
+        let known: Vec<&str> = list.iter().map(|s| s.name.as_str()).collect();
+        anyhow::bail!(
+            "--study {missing}: {} has no such study (it has: {})",
+            file.display(),
+            known.join(", ")
+        );
+    }
+    list.retain(|s| names.contains(&s.name));
     Ok(())
 }
 
