@@ -214,10 +214,27 @@ pub fn render(studies: &[StudyDir], out: &Path) -> String {
            costs whatever its size cancels), the whole draw's count at the smaller size is \
            secondary. Ratios divide by the `ggx` baseline, or by the first published figure's \
            run, measured in the same run.\n\n";
-    md += "On lavapipe the \"GPU\" is the CPU: timestamps are wall-clock time of llvmpipe's JIT \
-           code (noisy, up to 2× between runs), and fp16 is emulated (it costs more, where a GPU \
-           saves registers). The talk's figures come from an RX 6700 XT (D3D12, RGP); compare \
-           their ratios, not their milliseconds.\n\n";
+    let mut devices = Vec::new();
+    if studies.iter().any(|s| is_llvmpipe(&s.results)) {
+        devices.push(
+            "On lavapipe the \"GPU\" is the CPU: timestamps are wall-clock time of llvmpipe's JIT \
+             code (noisy, up to 2× between runs), and fp16 is emulated (it costs more, where a \
+             GPU saves registers).",
+        );
+    }
+    if studies.iter().any(|s| !is_llvmpipe(&s.results)) {
+        devices.push(
+            "On a GPU nothing is counted (callgrind sees llvmpipe's code only): the fragment \
+             stage's pipeline-executable statistics, where the driver reports them (registers, \
+             local memory, code size), stand beside the times.",
+        );
+    }
+    devices.push(
+        "The talk's figures come from an RX 6700 XT (D3D12, RGP); compare their ratios, not \
+         their milliseconds.",
+    );
+    md += &devices.join(" ");
+    md += "\n\n";
     let mut index = String::new();
     for s in studies {
         let _ = writeln!(
@@ -340,8 +357,8 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
     }
     let _ = writeln!(
         md,
-        "Device: **{}** ({}, Vulkan {}); {} scene, {}x{}, {} measured frames per variant{}; \
-         LP_NUM_THREADS={}; rev `{}`; sweep `{}`; results `{}`.\n",
+        "Device: **{}** ({}, Vulkan {}); {} scene, {}x{}, {} measured frames per variant{}{}; \
+         rev `{}`; sweep `{}`; results `{}`.\n",
         r.device.name,
         r.device.driver,
         r.device.api_version,
@@ -359,7 +376,14 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
                 )
             })
             .unwrap_or_default(),
-        r.lp_num_threads.as_deref().unwrap_or("unset"),
+        if is_llvmpipe(r) {
+            format!(
+                "; LP_NUM_THREADS={}",
+                r.lp_num_threads.as_deref().unwrap_or("unset")
+            )
+        } else {
+            String::new()
+        },
         r.git_rev,
         m.sweep_file,
         relative(&s.dir, out_dir),
@@ -410,7 +434,7 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
         };
         rows.push((coords, &r.runs[p.run]));
     }
-    for (coords, run) in rows {
+    for (coords, run) in &rows {
         let _ = write!(
             md,
             "| {} | {} | {:.3} | {:.3}–{:.3} | {:.2}× |",
@@ -441,6 +465,7 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
         md.push('\n');
     }
     md.push('\n');
+    executable_stats_table(md, &header_axes, &rows);
     pivot_section(md, s);
     for chart in ["chart-time", "chart-instructions"] {
         let png = s.dir.join(format!("{chart}.png"));
@@ -556,6 +581,117 @@ fn executable_stats_line(r: &Results) -> Option<String> {
     ))
 }
 
+/// The fragment stage's name among a pipeline's executables, as drivers spell it.
+fn is_fragment(executable: &serde_json::Value) -> bool {
+    ["name", "description"].iter().any(|k| {
+        executable[k]
+            .as_str()
+            .is_some_and(|t| t.to_ascii_lowercase().contains("fragment") || t == "FS")
+    })
+}
+
+/// The fragment executable's statistics of a run, by name, where the driver reports them.
+fn fragment_stats(run: &Run) -> Option<Vec<(String, serde_json::Value)>> {
+    let exe = run
+        .executable_stats
+        .as_ref()?
+        .as_array()?
+        .iter()
+        .find(|e| is_fragment(e))?;
+    Some(
+        exe["statistics"]
+            .as_array()?
+            .iter()
+            .filter_map(|s| Some((s["name"].as_str()?.to_string(), s["value"].clone())))
+            .collect(),
+    )
+}
+
+/// A bit that one driver sets in every value of a statistic (NVIDIA reports `Local Memory
+/// Size` as 2^36 plus the bytes, the ggx shader's included): stripped, and said so.
+const FLAG_BIT: u64 = 1 << 36;
+
+/// The table's rows again, with the fragment stage's pipeline-executable statistics (registers,
+/// code size, local memory …) where the driver reports them: the statistics that differ between
+/// the rows as columns, the others in one line below.
+fn executable_stats_table(md: &mut String, header_axes: &str, rows: &[(Vec<String>, &Run)]) {
+    let stats: Vec<Option<Vec<(String, serde_json::Value)>>> =
+        rows.iter().map(|(_, run)| fragment_stats(run)).collect();
+    if stats.iter().all(Option::is_none) {
+        return;
+    }
+    let mut names: Vec<String> = Vec::new();
+    for (name, _) in stats.iter().flatten().flatten() {
+        if !names.contains(name) {
+            names.push(name.clone());
+        }
+    }
+    let value = |row: usize, name: &str| -> Option<&serde_json::Value> {
+        stats[row]
+            .as_ref()?
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v)
+    };
+    let flagged: Vec<bool> = names
+        .iter()
+        .map(|name| {
+            let values: Vec<u64> = (0..rows.len())
+                .filter_map(|i| value(i, name)?.as_u64())
+                .collect();
+            !values.is_empty()
+                && values
+                    .iter()
+                    .all(|v| v & FLAG_BIT != 0 && *v < 2 * FLAG_BIT)
+        })
+        .collect();
+    let shown = |i: usize, k: usize| -> String {
+        match value(i, &names[k]) {
+            None => "–".to_string(),
+            Some(v) => match v.as_u64() {
+                Some(n) if flagged[k] => (n - FLAG_BIT).to_string(),
+                _ => v.to_string(),
+            },
+        }
+    };
+    let (varying, constant): (Vec<usize>, Vec<usize>) =
+        (0..names.len()).partition(|&k| (1..rows.len()).any(|i| shown(i, k) != shown(0, k)));
+    let _ = writeln!(
+        md,
+        "Fragment stage, as the driver compiled it (`VK_KHR_pipeline_executable_properties`):\n"
+    );
+    let _ = write!(md, "| {header_axes} | material |");
+    for &k in &varying {
+        let _ = write!(md, " {} |", names[k]);
+    }
+    let _ = writeln!(
+        md,
+        "\n|{}",
+        "---|".repeat(varying.len() + header_axes.split(" | ").count() + 1)
+    );
+    for (i, (coords, run)) in rows.iter().enumerate() {
+        let _ = write!(md, "| {} | {} |", coords.join(" | "), run.material);
+        for &k in &varying {
+            let _ = write!(md, " {} |", shown(i, k));
+        }
+        md.push('\n');
+    }
+    md.push('\n');
+    let mut notes: Vec<String> = constant
+        .iter()
+        .map(|&k| format!("{} {}", names[k], shown(0, k)))
+        .collect();
+    notes.extend((0..names.len()).filter(|&k| flagged[k]).map(|k| {
+        format!(
+            "{} is shown without bit 36, which every value has set",
+            names[k]
+        )
+    }));
+    if !notes.is_empty() {
+        let _ = writeln!(md, "In every row: {}.\n", notes.join("; "));
+    }
+}
+
 /// Studies of several materials over one other axis: each material's ratios to its ggx
 /// baseline side by side (material rows, the axis's values as columns).
 fn pivot_section(md: &mut String, s: &StudyDir) {
@@ -621,7 +757,12 @@ fn target_verdict(ratio: f64, max: f64) -> String {
     if ratio <= max {
         "met".into()
     } else {
-        format!("missed by {:.0} %", (ratio / max - 1.0) * 100.0)
+        let percent = (ratio / max - 1.0) * 100.0;
+        if percent < 1.0 {
+            format!("missed by {percent:.2} %")
+        } else {
+            format!("missed by {percent:.0} %")
+        }
     }
 }
 
@@ -1473,5 +1614,51 @@ mod tests {
             relative(Path::new("a/b.png"), Path::new("c/d")),
             "../../a/b.png"
         );
+    }
+
+    #[test]
+    fn the_stats_table_shows_what_differs_and_strips_the_flag_bit() {
+        let stats = |regs: u64, local: u64| {
+            serde_json::json!([
+                {"name": "VS", "description": "vertex", "statistics": [
+                    {"name": "Register Count", "value": 9}]},
+                {"name": "FS", "description": "fragment", "statistics": [
+                    {"name": "Register Count", "value": regs},
+                    {"name": "Local Memory Size", "value": FLAG_BIT + local},
+                    {"name": "Binary Size", "value": 4096}]},
+            ])
+        };
+        let mut a = run("model=tm2,max_layers=4", 1.0, 1, 1);
+        a.executable_stats = Some(stats(115, 896));
+        let mut b = run("model=tm2,max_layers=8", 2.0, 1, 1);
+        b.executable_stats = Some(stats(115, 1792));
+        let rows = vec![(vec!["4".to_string()], &a), (vec!["8".to_string()], &b)];
+        let mut md = String::new();
+        executable_stats_table(&mut md, "max_layers", &rows);
+        assert!(
+            md.contains("| max_layers | material | Local Memory Size |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| 4 | gold | 896 |") && md.contains("| 8 | gold | 1792 |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("Register Count 115") && md.contains("Binary Size 4096"),
+            "{md}"
+        );
+        assert!(md.contains("without bit 36"), "{md}");
+
+        let mut none = String::new();
+        let plain = run("model=ggx", 1.0, 1, 1);
+        executable_stats_table(&mut none, "model", &[(vec!["ggx".to_string()], &plain)]);
+        assert!(none.is_empty());
+    }
+
+    #[test]
+    fn a_narrow_miss_is_not_rounded_to_zero() {
+        assert_eq!(target_verdict(1.0004, 1.0), "missed by 0.04 %");
+        assert_eq!(target_verdict(1.07, 1.0), "missed by 7 %");
+        assert_eq!(target_verdict(1.0, 1.0), "met");
     }
 }
