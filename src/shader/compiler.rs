@@ -9,7 +9,9 @@ mod embedded {
     include!(concat!(env!("OUT_DIR"), "/glsl_files.rs"));
 }
 
+use std::collections::HashMap;
 use std::path::{Component, Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
 /// Constants shared with GLSL; the shaders read them as macros.
 pub const HOST_DEFINES: &[(&str, u32)] = &[
@@ -229,22 +231,44 @@ fn resolve_include(requested: &str, requester: &str) -> Result<shaderc::Resolved
     ))
 }
 
-/// Compiles entry points; one shaderc compiler per instance.
+/// Compiles entry points; one shaderc compiler per instance, which remembers the SPIR-V of
+/// every entry point and set of defines it compiled: a variant's pipelines differ in their
+/// specialization constants, not their SPIR-V, and shaderc takes about a second over the
+/// forward shader (many times that under valgrind, where the counting workers run).
 pub struct ShaderCompiler {
     compiler: shaderc::Compiler,
+    compiled: Mutex<HashMap<String, Arc<[u32]>>>,
 }
 
 impl ShaderCompiler {
     pub fn new() -> Result<Self, ShaderError> {
         let compiler = shaderc::Compiler::new().map_err(|e| ShaderError::Init(e.to_string()))?;
-        Ok(Self { compiler })
+        Ok(Self {
+            compiler,
+            compiled: Mutex::new(HashMap::new()),
+        })
     }
 
-    /// Compiles `entry` (a path under `glsl/`) with extra `defines` (name, value).
-    pub fn compile(&self, entry: &str, defines: &[(&str, &str)]) -> Result<Vec<u32>, ShaderError> {
+    /// Compiles `entry` (a path under `glsl/`) with extra `defines` (name, value), or returns
+    /// what an earlier call with the same arguments compiled.
+    pub fn compile(
+        &self,
+        entry: &str,
+        defines: &[(&str, &str)],
+    ) -> Result<Arc<[u32]>, ShaderError> {
+        let key = defines.iter().fold(entry.to_owned(), |k, (name, value)| {
+            format!("{k}\0{name}={value}")
+        });
+        // A poisoned lock only means another thread panicked mid-insert of a complete value.
+        let lock = || self.compiled.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(words) = lock().get(&key) {
+            return Ok(Arc::clone(words));
+        }
         let text = source(entry)
             .ok_or_else(|| ShaderError::UnknownEntry(entry.into(), entry_points().join(", ")))?;
-        self.compile_source(entry, text, defines)
+        let words: Arc<[u32]> = self.compile_source(entry, text, defines)?.into();
+        lock().insert(key, Arc::clone(&words));
+        Ok(words)
     }
 
     /// Compiles `text` as if it were the entry point `name` (which gives the stage).
@@ -286,6 +310,23 @@ impl ShaderCompiler {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_entry_is_compiled_once_per_set_of_defines() {
+        let shaders = ShaderCompiler::new().unwrap();
+        let plain = shaders.compile("tir_table.comp.glsl", &[]).unwrap();
+        let again = shaders.compile("tir_table.comp.glsl", &[]).unwrap();
+        assert!(Arc::ptr_eq(&plain, &again));
+        let defined = shaders
+            .compile("tir_table.comp.glsl", &[("LAMINA_FP16", "1")])
+            .unwrap();
+        assert!(!Arc::ptr_eq(&plain, &defined));
+        assert_eq!(plain[0], 0x0723_0203, "SPIR-V magic");
+        assert!(matches!(
+            shaders.compile("nope.comp.glsl", &[]),
+            Err(ShaderError::UnknownEntry(..))
+        ));
+    }
 
     #[test]
     fn includes_resolve_relative_then_rooted() {
