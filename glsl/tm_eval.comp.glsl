@@ -3,14 +3,17 @@
 // --backend gpu` and of the GPU-vs-CPU tests. Same library code as the forward pass.
 // Output per sample, `stride` vec4s: (R, lobe count), (T, retro mask), then (weight, α) per
 // lobe; the retro mask's bits (bit k: lobe k is lit around the view, LOBE_RETRO; the first 32
-// lobes) are stored as the float's bits.
+// lobes) are stored as the float's bits. With `lit`, each sample also carries a light direction
+// l (the normal is +z, the view (√(1 − μ²), 0, μ)) and a lobe's slot holds, in place of its
+// weight, its response to a unit irradiance from l (weight × lib/light.glsl's light_lobe at
+// the lobe's shading roughness for a light of angular radius `angular_radius`).
 #include "shared/variant.glsl"
 #include "bindings/shading.glsl"
 
 layout(local_size_x_id = SHADE_LOCAL_SIZE_X_ID) in;
 
 layout(set = 1, binding = 0, std430) readonly buffer Samples {
-    float cos_theta[];
+    vec4 cos_and_light[];  // x: μ; yzw: l (with `lit`)
 } samples;
 layout(set = 1, binding = 1, std430) writeonly buffer Results {
     vec4 values[];
@@ -19,19 +22,31 @@ layout(set = 1, binding = 1, std430) writeonly buffer Results {
 layout(push_constant) uniform Push {
     uint sample_count;
     uint stride;
+    uint lit;
+    float angular_radius;
 } push;
 
 #include "lib/tm2.glsl"
 #include "lib/tm6.glsl"
+#include "lib/light.glsl"
 
 // Where tm_emit_lobe writes: the sample's first lobe slot and how many are filled.
 uint eval_first_lobe;
 uint eval_lobes;
 uint eval_retro;
+float eval_mu;
+vec3 eval_light;
 
 void tm_emit_lobe(vec3 weight, float alpha, uint kind) {
     if (eval_lobes < TM_MAX_LOBES) {
-        results.values[eval_first_lobe + eval_lobes] = vec4(weight, alpha);
+        vec3 value = weight;
+        if (push.lit != 0u) {
+            vec3 v = vec3(sqrt(max(1.0 - eval_mu * eval_mu, 0.0)), 0.0, eval_mu);
+            float a = light_alpha(alpha, push.angular_radius);
+            value *= light_lobe(vec3(0.0, 0.0, 1.0), v, eval_mu, eval_light, a,
+                                kind == LOBE_RETRO);
+        }
+        results.values[eval_first_lobe + eval_lobes] = vec4(value, alpha);
     }
     if (kind == LOBE_RETRO && eval_lobes < 32u) {
         eval_retro |= 1u << eval_lobes;
@@ -50,7 +65,10 @@ void main() {
     eval_retro = 0u;
     vec3 reflectance;
     vec3 transmittance;
-    float mu = samples.cos_theta[i];
+    vec4 sample_i = samples.cos_and_light[i];
+    float mu = sample_i.x;
+    eval_mu = mu;
+    eval_light = sample_i.yzw;
     uint count = MODEL == MODEL_TM6
         ? tm6_evaluate(mu, reflectance, transmittance)
         : tm2_evaluate(mu, reflectance, transmittance);

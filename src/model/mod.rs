@@ -15,6 +15,7 @@ pub(crate) mod adding;
 pub mod fgd;
 pub mod fresnel;
 pub mod hg;
+pub mod light;
 pub mod microfacet;
 pub mod random;
 pub mod tir;

@@ -67,6 +67,8 @@ impl Tolerance {
 struct Push {
     sample_count: u32,
     stride: u32,
+    lit: u32,
+    angular_radius: f32,
 }
 
 /// `tm_eval.comp.glsl`: one invocation per view cosine, after the shading set.
@@ -76,7 +78,9 @@ pub const KERNEL: KernelInterface = KernelInterface {
     bindings: &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
     push: crate::push_block!(Push {
         sample_count,
-        stride
+        stride,
+        lit,
+        angular_radius
     }),
     local_size: [LOCAL_SIZE_1D, 1],
 };
@@ -190,6 +194,33 @@ impl<'g> GpuEvaluator<'g> {
         layers: &[LayerParams],
         cosines: &[f64],
     ) -> Result<Vec<GpuEvaluation>> {
+        let samples: Vec<[f32; 4]> = cosines.iter().map(|&c| [c as f32, 0.0, 0.0, 0.0]).collect();
+        self.run(layers, &samples, None)
+    }
+
+    /// The model's response to a light: for each (μ, l) — the view (√(1 − μ²), 0, μ), the
+    /// light's unit direction l, the normal +z — the evaluation at μ with each lobe's weight
+    /// replaced by its response to a unit irradiance from l (`model::light::light_term`'s
+    /// terms), for a light of `angular_radius` radians. The lobes' roughness is the model's.
+    pub fn evaluate_lit(
+        &self,
+        layers: &[LayerParams],
+        samples: &[(f64, glam::DVec3)],
+        angular_radius: f64,
+    ) -> Result<Vec<GpuEvaluation>> {
+        let samples: Vec<[f32; 4]> = samples
+            .iter()
+            .map(|&(mu, l)| [mu as f32, l.x as f32, l.y as f32, l.z as f32])
+            .collect();
+        self.run(layers, &samples, Some(angular_radius))
+    }
+
+    fn run(
+        &self,
+        layers: &[LayerParams],
+        samples: &[[f32; 4]],
+        light: Option<f64>,
+    ) -> Result<Vec<GpuEvaluation>> {
         let specialized;
         let kernel = match &self.kernel {
             Some(kernel) => {
@@ -203,7 +234,7 @@ impl<'g> GpuEvaluator<'g> {
                 &specialized
             }
         };
-        if cosines.is_empty() {
+        if samples.is_empty() {
             return Ok(Vec::new());
         }
         let device = &self.gpu.device;
@@ -212,22 +243,21 @@ impl<'g> GpuEvaluator<'g> {
         let shading = self
             .inputs
             .bind(self.variant, &material, None, "eval shading")?;
-        let samples: Vec<f32> = cosines.iter().map(|&c| c as f32).collect();
+        let results = Buffer::new(
+            device,
+            BufferDesc::readback((samples.len() * stride * 16) as u64),
+            "eval results",
+        )?;
+        let count = samples.len() as u32;
         let samples = Buffer::with_data(
             device,
             BufferUsageFlags::STORAGE_BUFFER,
-            &samples,
+            samples,
             "eval samples",
-        )?;
-        let results = Buffer::new(
-            device,
-            BufferDesc::readback((cosines.len() * stride * 16) as u64),
-            "eval results",
         )?;
         let mut set = DescriptorSet::new(device, &kernel.set_layout, "eval")?;
         set.write(0, Resource::Buffer(&samples))
             .write(1, Resource::Buffer(&results));
-        let count = cosines.len() as u32;
         submit_and_wait(device, "eval", |rec| {
             kernel.record_dispatch(
                 rec,
@@ -235,6 +265,8 @@ impl<'g> GpuEvaluator<'g> {
                 &Push {
                     sample_count: count,
                     stride: stride as u32,
+                    lit: u32::from(light.is_some()),
+                    angular_radius: light.unwrap_or(0.0) as f32,
                 },
                 [count, 1, 1],
             );

@@ -14,6 +14,7 @@ use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::shader::interface::{InputViews, ShadingLayout};
 use crate::tables::fgd::{FgdImages, FgdLookup};
+use crate::tables::lobe_albedo::LobeAlbedoTable;
 use crate::tables::split_sum::{self, SplitSumTable};
 use crate::tables::tir::{self, TirTable};
 use crate::variant::{Fgd, Tir, VariantKey, G2};
@@ -24,6 +25,7 @@ pub struct ShadingInputs<'g> {
     gpu: &'g Gpu,
     pub layout: ShadingLayout,
     split_sums: HashMap<G2, SplitSumTable>,
+    lobe_albedos: HashMap<G2, LobeAlbedoTable>,
     /// Built (or loaded from the disk cache) when a LUT variant is prepared.
     tir: Option<TirTable>,
     /// Zeros bound in place of the TIR table for the other variants.
@@ -38,6 +40,7 @@ impl<'g> ShadingInputs<'g> {
             gpu,
             layout: ShadingLayout::new(&gpu.device)?,
             split_sums: HashMap::new(),
+            lobe_albedos: HashMap::new(),
             tir: None,
             tir_unused: TirTable::for_variant(gpu, Tir::None)?,
             fgd_tables: HashMap::new(),
@@ -54,6 +57,10 @@ impl<'g> ShadingInputs<'g> {
                 split_sum::DEFAULT_SAMPLES,
             )?;
             self.split_sums.insert(variant.g2, table);
+        }
+        if !self.lobe_albedos.contains_key(&variant.g2) {
+            let table = LobeAlbedoTable::load_or_build(self.gpu, variant.g2)?;
+            self.lobe_albedos.insert(variant.g2, table);
         }
         if matches!(variant.tir, Tir::Lut32 | Tir::Lut16) && self.tir.is_none() {
             self.tir = Some(TirTable::for_variant(self.gpu, variant.tir)?);
@@ -73,6 +80,13 @@ impl<'g> ShadingInputs<'g> {
     /// The split-sum table of `variant` (its G2 form).
     pub fn split_sum(&self, variant: VariantKey) -> Result<&SplitSumTable> {
         self.split_sums
+            .get(&variant.g2)
+            .ok_or_else(|| Self::unprepared(variant))
+    }
+
+    /// The white lobe's albedo table of `variant` (its G2 form), which the lights read.
+    pub fn lobe_albedo(&self, variant: VariantKey) -> Result<&LobeAlbedoTable> {
+        self.lobe_albedos
             .get(&variant.g2)
             .ok_or_else(|| Self::unprepared(variant))
     }
@@ -107,6 +121,7 @@ impl<'g> ShadingInputs<'g> {
         let views = InputViews {
             material,
             split_sum,
+            lobe_albedo: &self.lobe_albedo(variant)?.view,
             tir: self.tir(variant).view_for(variant.tir),
             fgd_volume: &fgd.volume_view,
             fgd_plane: &fgd.plane_view,

@@ -5,6 +5,7 @@ pub mod eval;
 pub mod forward;
 pub mod furnace;
 pub mod inputs;
+pub mod lights;
 pub mod renderer;
 pub mod scene;
 pub mod sheet;

@@ -12,7 +12,7 @@ use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
 use crate::model::LayerParams;
 use crate::shader::interface::{
-    material_buffer, FrameConstants, SCENE_BINDINGS, SCENE_SET, SHADING_SET,
+    lights_block, material_buffer, FrameConstants, SCENE_BINDINGS, SCENE_SET, SHADING_SET,
 };
 use crate::shader::specialize::{shade_spec, SpecializeError};
 use crate::tables::environment::{EnvDesc, Environment};
@@ -26,6 +26,7 @@ use crate::vk::{
 use super::baked::{self, BakedTable};
 use super::forward::{ForwardPass, PassMaterial};
 use super::inputs::ShadingInputs;
+use super::lights::Lighting;
 use super::scene::{uv_sphere, Camera, Mesh};
 use super::sky::SkyPass;
 
@@ -81,6 +82,8 @@ pub struct Renderer<'g> {
     index_count: u32,
     target: TargetFormat,
     pub camera: Camera,
+    /// The environment's scale and the analytic lights (the environment alone by default).
+    pub lighting: Lighting,
 }
 
 impl<'g> Renderer<'g> {
@@ -140,6 +143,7 @@ impl<'g> Renderer<'g> {
             index_count: mesh.indices.len() as u32,
             target,
             camera: Camera::default(),
+            lighting: Lighting::default(),
         })
     }
 
@@ -260,13 +264,24 @@ impl<'g> Renderer<'g> {
             view_proj: view_proj.to_cols_array_2d(),
             inv_view_proj: view_proj.inverse().to_cols_array_2d(),
             camera_pos: self.camera.eye.extend(1.0).to_array(),
-            params: [self.environment.desc.mip_count as f32, 0.0, 0.0, 0.0],
+            params: [
+                self.environment.desc.mip_count as f32,
+                self.lighting.environment as f32,
+                0.0,
+                0.0,
+            ],
         };
         let uniforms = Buffer::with_data(
             device,
             BufferUsageFlags::UNIFORM_BUFFER,
             &[constants],
             "frame constants",
+        )?;
+        let lights = Buffer::with_data(
+            device,
+            BufferUsageFlags::STORAGE_BUFFER,
+            &lights_block(&self.lighting.lights),
+            "lights",
         )?;
         let material = material_buffer(device, layers, "material")?;
         let baked = pass
@@ -280,7 +295,8 @@ impl<'g> Renderer<'g> {
         let mut scene = DescriptorSet::new(device, &self.scene_layout, "scene")?;
         scene
             .write(0, Resource::Buffer(&uniforms))
-            .write(1, Resource::Sampled(&self.environment.view, &self.sampler));
+            .write(1, Resource::Sampled(&self.environment.view, &self.sampler))
+            .write(2, Resource::Buffer(&lights));
 
         let format = self.target.format();
         let target = Image::new(

@@ -190,6 +190,12 @@ fn codes_glsl() -> String {
         ("TM_INDEX_MATCHED", crate::model::INDEX_MATCHED),
         ("TM_REFLECTS_NOTHING", crate::model::REFLECTS_NOTHING),
         ("HG_RATIO_FLOOR", crate::model::hg::RATIO_FLOOR),
+        ("LIGHT_MIN_ALPHA", crate::model::light::MIN_ALPHA),
+        ("LIGHT_MIN_ALPHA_FP16", crate::model::light::MIN_ALPHA_FP16),
+        (
+            "LOBE_ALBEDO_SIZE",
+            f64::from(crate::tables::lobe_albedo::SIZE),
+        ),
         (
             "TIR_CONSTANT_FRACTION",
             crate::model::tir::CONSTANT_FRACTION,

@@ -109,8 +109,9 @@ pub const FGD_GRID_SIZE: u32 = 64;
 /// `lvp_inline_uniforms`), which turned the generic pass into a per-material one behind the
 /// benchmarks' back and took minutes of LLVM time for some variants. Storage-buffer loads are
 /// never inlined. Binding 5 holds a `mode=baked` material's lobe table (`render::baked`; a
-/// placeholder for every other pass).
-pub const SHADING_BINDINGS: [Binding; 6] = [
+/// placeholder for every other pass). Binding 6 holds the white GGX lobe's directional albedo
+/// that the analytic lights normalise each lobe by (`model::light`).
+pub const SHADING_BINDINGS: [Binding; 7] = [
     Binding {
         binding: 0,
         kind: BindingKind::StorageBuffer,
@@ -141,6 +142,11 @@ pub const SHADING_BINDINGS: [Binding; 6] = [
         kind: BindingKind::SampledImage,
         name: "baked_lobes",
     },
+    Binding {
+        binding: 6,
+        kind: BindingKind::SampledImage,
+        name: "lobe_albedo",
+    },
 ];
 
 /// The views and buffer one shading set binds.
@@ -152,6 +158,8 @@ pub struct InputViews<'a> {
     pub fgd_plane: &'a ImageView,
     /// `mode=baked`: the lobe table (`render::baked::BakedTexture`); any 2-D view otherwise.
     pub baked: &'a ImageView,
+    /// The white GGX lobe's albedo E(μ, √α) (`tables::lobe_albedo`).
+    pub lobe_albedo: &'a ImageView,
 }
 
 /// The shading set's layout (what a pipeline that shades lists as set 0) and the sampler its
@@ -184,7 +192,8 @@ impl ShadingLayout {
             .write(2, sampled(views.tir))
             .write(3, sampled(views.fgd_volume))
             .write(4, sampled(views.fgd_plane))
-            .write(5, sampled(views.baked));
+            .write(5, sampled(views.baked))
+            .write(6, sampled(views.lobe_albedo));
         Ok(set)
     }
 }
@@ -207,7 +216,7 @@ pub fn material_buffer(
 pub const SCENE_SET: u32 = 1;
 
 /// The scene set's bindings, as `glsl/include/bindings/scene.glsl` declares them.
-pub const SCENE_BINDINGS: [Binding; 2] = [
+pub const SCENE_BINDINGS: [Binding; 3] = [
     Binding {
         binding: 0,
         kind: BindingKind::UniformBuffer,
@@ -218,4 +227,55 @@ pub const SCENE_BINDINGS: [Binding; 2] = [
         kind: BindingKind::SampledImage,
         name: "prefiltered",
     },
+    Binding {
+        binding: 2,
+        kind: BindingKind::StorageBuffer,
+        name: "Lights",
+    },
 ];
+
+/// One analytic light (`shared/light.glsl`, std430).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct LightGpu {
+    /// w = 0: xyz is the unit direction towards a directional light; w = 1: a point's position.
+    pub position: [f32; 4],
+    /// rgb: colour × intensity; w: angular radius in radians.
+    pub radiance: [f32; 4],
+}
+
+const _: () = assert!(size_of::<LightGpu>() == 32);
+const _: () = assert!(offset_of!(LightGpu, radiance) == 16);
+
+/// The `Lights` block of `bindings/scene.glsl`: a `uvec4` header (x: count) and the lights,
+/// as bytes. One zeroed light follows an empty list, so the buffer is never smaller than the
+/// block's declared minimum.
+pub fn lights_block(lights: &[crate::render::lights::Light]) -> Vec<u8> {
+    use crate::render::lights::LightKind;
+    let mut bytes = bytemuck::bytes_of(&[lights.len() as u32, 0, 0, 0]).to_vec();
+    let packed: Vec<LightGpu> = lights
+        .iter()
+        .map(|light| {
+            let c = light.color.map(|c| (c * light.intensity) as f32);
+            let (position, radius) = match light.kind {
+                LightKind::Directional {
+                    direction,
+                    angular_radius,
+                } => (direction.map(|d| d as f32), angular_radius as f32),
+                LightKind::Point { position } => (position.map(|p| p as f32), 0.0),
+            };
+            let w = if matches!(light.kind, LightKind::Point { .. }) {
+                1.0
+            } else {
+                0.0
+            };
+            LightGpu {
+                position: [position[0], position[1], position[2], w],
+                radiance: [c[0], c[1], c[2], radius],
+            }
+        })
+        .chain(lights.is_empty().then(LightGpu::default))
+        .collect();
+    bytes.extend_from_slice(bytemuck::cast_slice(&packed));
+    bytes
+}

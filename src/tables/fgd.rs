@@ -799,6 +799,8 @@ impl<'g> FgdProbe<'g> {
             fgd_volume: &images.volume_view,
             fgd_plane: &images.plane_view,
             baked: &split_sum.view,
+            // The probe lights nothing: any 2-D view fills the lights' binding.
+            lobe_albedo: &split_sum.view,
         };
         let shading = self.layout.bind(device, &views, "fgd probe shading")?;
         let mut set = DescriptorSet::new(device, &self.kernel.set_layout, "fgd probe")?;

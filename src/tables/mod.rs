@@ -11,6 +11,7 @@ pub mod cache;
 pub mod environment;
 pub mod fgd;
 pub mod fgd_study;
+pub mod lobe_albedo;
 pub mod split_sum;
 pub mod spot;
 pub mod tir;

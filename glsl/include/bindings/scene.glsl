@@ -1,13 +1,20 @@
-// Set 1 of the scene's graphics passes (forward, sky): the frame constants and the
-// prefiltered environment. Mirrors SCENE_BINDINGS in src/render/renderer.rs.
+// Set 1 of the scene's graphics passes (forward, sky): the frame constants, the prefiltered
+// environment and the analytic lights. Mirrors SCENE_BINDINGS in src/shader/interface.rs. The
+// lights are a storage buffer for the material's reason (bindings/shading.glsl): lavapipe would
+// inline a uniform light count into the shader and recompile it per count.
 #ifndef LAMINA_BINDINGS_SCENE
 #define LAMINA_BINDINGS_SCENE
 
 #include "../shared/frame.glsl"
+#include "../shared/light.glsl"
 
 layout(set = 1, binding = 0, std140) uniform Frame {
     FrameConstants frame;
 };
 layout(set = 1, binding = 1) uniform samplerCube prefiltered;
+layout(set = 1, binding = 2, std430) readonly buffer Lights {
+    uvec4 light_info;  // x: light count
+    LightGpu lights[];
+};
 
 #endif

@@ -17,5 +17,8 @@ layout(set = 0, binding = 4) uniform sampler2D fgd_belcour; // belcour's folded 
 // MODE_BAKED: the material's lobes over the view cosine, (weight RGB, √α): lobe k in row k,
 // sample j in column j at √μ = j/(BAKED_SIZE − 1) (vertex-centred), read with the linear filter.
 layout(set = 0, binding = 5) uniform sampler2D baked_lobes;
+// The directional albedo E of a white GGX lobe at (μ, √α) (vertex-centred texels), with the variant's G2 (f32,
+// src/tables/lobe_albedo.rs): what the analytic lights normalise each lobe by (lib/light.glsl).
+layout(set = 0, binding = 6) uniform sampler2D lobe_albedo;
 
 #endif

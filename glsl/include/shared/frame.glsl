@@ -7,7 +7,8 @@ struct FrameConstants {
     mat4 view_proj;
     mat4 inv_view_proj;
     vec4 camera_pos;     // xyz: world-space eye
-    vec4 params;         // x: mip count of the prefiltered environment; y, z, w: unused
+    vec4 params;         // x: mip count of the prefiltered environment; y: the environment's
+                         // scale (0: lights only); z, w: unused
 };
 
 #endif

@@ -1,0 +1,45 @@
+// Analytic lights on the model's lobes: each lobe is the GGX microfacet lobe of its roughness,
+// without Fresnel (the model put the energy in the lobe's weight), divided by the white lobe's
+// directional albedo E(μ_v, α) so that its response to light from every direction integrates
+// to the weight. src/model/light.rs derives it, with its sources, and is the oracle.
+// D is the ndf axis's form, G2 the g2 axis's (lib/microfacet.glsl); E is read from the
+// shading set's lobe_albedo table, built with the same G2.
+#ifndef LAMINA_LIB_LIGHT
+#define LAMINA_LIB_LIGHT
+
+#include "microfacet.glsl"
+#include "../bindings/shading.glsl"
+
+#ifdef LAMINA_FP16
+const float LIGHT_ALPHA_FLOOR = LIGHT_MIN_ALPHA_FP16;
+#else
+const float LIGHT_ALPHA_FLOOR = LIGHT_MIN_ALPHA;
+#endif
+
+// The roughness a lobe of roughness α is shaded with under a light of angular radius θ_r
+// (radians): floored (a punctual light's highlight on a mirror is a delta), then widened by
+// the disk, tan(θ_r/2) (model::light::shading_alpha).
+float light_alpha(float alpha, float angular_radius) {
+    return min(max(alpha, LIGHT_ALPHA_FLOOR) + tan(0.5 * angular_radius), 1.0);
+}
+
+// The normalised lobe's response to a unit irradiance arriving along l (unit, towards the
+// light), times μ_l: D·G2 / (4 μ_v E(μ_v, α)). `n_dot_v` is the view cosine the model was
+// evaluated at; a retro lobe (6-flux back-scatter) is the same lobe about the view's mirror
+// image, whose peak is at l = v.
+float light_lobe(vec3 n, vec3 v, float n_dot_v, vec3 l, float alpha, bool retro) {
+    float n_dot_l = dot(n, l);
+    if (n_dot_l <= 0.0) {
+        return 0.0;
+    }
+    vec3 view = retro ? 2.0 * n_dot_v * n - v : v;
+    vec3 h = normalize(view + l);
+    float d = float(ndf(real(max(dot(n, h), 0.0)), real(alpha)));
+    float g2 = float(masking_shadowing(real(n_dot_l), real(n_dot_v), real(alpha)));
+    // Vertex-centred texels (src/tables/lobe_albedo.rs): x·(n − 1) + ½ texels in.
+    vec2 at = (vec2(n_dot_v, sqrt(alpha)) * (LOBE_ALBEDO_SIZE - 1.0) + 0.5) / LOBE_ALBEDO_SIZE;
+    float e = textureLod(lobe_albedo, at, 0.0).r;
+    return d * g2 / (4.0 * n_dot_v * e);
+}
+
+#endif
