@@ -32,6 +32,7 @@ fn jit_counts(stack: &Stack, keys: &[&str]) -> Vec<u64> {
             env_map: &env,
             cases: &cases,
             scene: Scene::Sphere,
+            lighting: None,
             sizes: &[Size {
                 width: 32,
                 height: 32,

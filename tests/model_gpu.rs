@@ -134,7 +134,16 @@ fn every_preset_renders_in_tm2_and_tm6() {
             variant: k.parse::<VariantKey>().unwrap(),
         })
         .collect();
-    let (w, h, _) = sheet::render(&gpu, &common::studio(), &rows, &columns, 256, 0.0).unwrap();
+    let (w, h, _) = sheet::render(
+        &gpu,
+        &common::studio(),
+        &rows,
+        &columns,
+        256,
+        0.0,
+        &Default::default(),
+    )
+    .unwrap();
     assert!(w > 512 && h > 256 * rows.len());
     common::assert_validation_clean(&gpu);
 }

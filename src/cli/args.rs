@@ -7,6 +7,7 @@ use std::marker::PhantomData;
 use std::path::PathBuf;
 
 use lamina::imageio;
+use lamina::render::lights::{Light, Lighting, MAX_INTENSITY};
 use lamina::Size;
 
 /// What a command that shows one material sets up: the material, its variant, the
@@ -23,6 +24,8 @@ pub struct SceneArgs<D: SceneDefaults> {
     pub material: String,
     #[arg(long, value_name = "KEY", help = D::VARIANT_HELP)]
     pub variant: Option<String>,
+    #[command(flatten)]
+    pub lights: LightArgs,
     #[arg(skip)]
     defaults: PhantomData<D>,
 }
@@ -41,6 +44,56 @@ pub struct EnvArg {
     /// Equirectangular OpenEXR environment map.
     #[arg(long, value_name = "FILE", default_value = "assets/env/studio.exr")]
     pub env: PathBuf,
+    #[command(flatten)]
+    pub lights: LightArgs,
+}
+
+/// The analytic lights and the environment's scale (`render::lights`).
+#[derive(clap::Args)]
+pub struct LightArgs {
+    /// Lighting file or preset (sun, sun-only, studio-keys; see assets/lights/): the
+    /// environment's scale and analytic lights. Default: the environment alone.
+    #[arg(long, value_name = "FILE|PRESET")]
+    pub lights: Option<String>,
+    /// An analytic light added to the lighting: `directional:X,Y,Z[:INTENSITY[:RADIUS_DEG]]`
+    /// (direction towards the light), `point:X,Y,Z[:INTENSITY]`, or a TOML inline table with a
+    /// lighting file's light keys. Repeatable.
+    #[arg(long = "light", value_name = "SPEC", value_parser = light_spec)]
+    pub light: Vec<Light>,
+    /// Scale of the environment's light, 0 to 10000 (0: the lights alone); overrides the
+    /// lighting file's `environment`.
+    #[arg(long, value_name = "X", value_parser = env_scale, allow_negative_numbers = true)]
+    pub env_scale: Option<f64>,
+}
+
+impl LightArgs {
+    /// The lighting these arguments ask for.
+    pub fn lighting(&self) -> anyhow::Result<Lighting> {
+        let mut lighting = match &self.lights {
+            Some(spec) => Lighting::load(spec)?,
+            None => Lighting::default(),
+        };
+        if let Some(scale) = self.env_scale {
+            lighting.environment = scale;
+        }
+        Ok(lighting.with_lights(&self.light)?)
+    }
+
+    /// Whether any lighting argument was given.
+    pub fn given(&self) -> bool {
+        self.lights.is_some() || !self.light.is_empty() || self.env_scale.is_some()
+    }
+}
+
+fn light_spec(text: &str) -> Result<Light, String> {
+    Light::parse_arg(text)
+}
+
+fn env_scale(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(x) if x.is_finite() && (0.0..=MAX_INTENSITY).contains(&x) => Ok(x),
+        _ => Err(format!("`{text}` is not a scale in 0 … {MAX_INTENSITY}")),
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]

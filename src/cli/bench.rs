@@ -80,6 +80,7 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
         height: args.size.height,
         frames: args.frames,
         warmup: args.warmup,
+        lighting: args.env.lights.lighting()?,
     };
     let bar = progress_bar("frames");
     print_pipelines(&mut gpu, Some(&bar));

@@ -50,6 +50,7 @@ pub fn run(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
     let mut gpu = global.open_gpu()?;
     print_pipelines(&mut gpu, None);
     let mut renderer = Renderer::new(&gpu, &equirect, EnvDesc::default())?;
+    renderer.lighting = scene.lights.lighting()?;
     let pass = renderer.prepare(variant, &layers)?;
     let (width, height) = (scene.size.width, scene.size.height);
     for _ in 0..args.warmup {

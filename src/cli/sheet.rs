@@ -44,7 +44,16 @@ pub fn run(global: &GlobalArgs, args: &SheetArgs) -> Result<()> {
     let rows = sheet::preset_rows()?;
     let columns = sheet::columns(&rows, &keys)?;
     let gpu = global.open_gpu()?;
-    let (w, h, rgba) = sheet::render(&gpu, &equirect, &rows, &columns, args.tile, args.exposure)?;
+    let lighting = args.env.lights.lighting()?;
+    let (w, h, rgba) = sheet::render(
+        &gpu,
+        &equirect,
+        &rows,
+        &columns,
+        args.tile,
+        args.exposure,
+        &lighting,
+    )?;
     check_validation(&gpu)?;
     imageio::write_png(&args.out, w, h, &rgba)?;
     println!(

@@ -43,6 +43,11 @@ pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
         Some(CounterArg::None) => list.iter_mut().for_each(|s| s.counter = None),
         None => {}
     }
+    // Lighting arguments replace every study's `lights`.
+    if args.env.lights.given() {
+        let lighting = args.env.lights.lighting()?;
+        list.iter_mut().for_each(|s| s.lighting = lighting.clone());
+    }
     let dir_of = |s: &sweep::Study| sweep::output_dir(&args.out, s, suite);
     print_plan(args, &list, &dir_of);
     if args.dry_run {

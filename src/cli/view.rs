@@ -60,6 +60,7 @@ pub fn run(global: &GlobalArgs, args: &ViewArgs) -> Result<()> {
         save_stack: args.save_stack.clone(),
         instance: global.instance(true),
         selector: global.selector(),
+        lighting: scene.lights.lighting()?,
     })?;
     println!(
         "{} frame(s), final size {}x{}, swapchain built {} time(s)",

@@ -15,6 +15,7 @@ use crate::imageio::HdrImage;
 use crate::material::Stack;
 use crate::model::LayerParams;
 use crate::render::forward::ForwardPass;
+use crate::render::lights::Lighting;
 use crate::render::scene::Scene;
 use crate::render::Renderer;
 use crate::tables::environment::EnvDesc;
@@ -36,6 +37,8 @@ pub struct BenchConfig {
     pub height: u32,
     pub frames: u32,
     pub warmup: u32,
+    /// The environment's scale and the analytic lights of every frame.
+    pub lighting: Lighting,
 }
 
 impl BenchConfig {
@@ -135,7 +138,21 @@ pub struct Results {
     /// The instruction counter's sizes and shaded pixels; `null` when not counted.
     #[serde(default)]
     pub counter: Option<CounterInfo>,
+    /// The lighting as a lighting file (`render::lights`); absent: the environment alone, as
+    /// every result before lights.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lighting: Option<String>,
     pub runs: Vec<Run>,
+}
+
+impl Results {
+    /// The lighting the runs were drawn under.
+    pub fn lighting(&self) -> Result<Lighting> {
+        match &self.lighting {
+            None => Ok(Lighting::default()),
+            Some(text) => Lighting::parse(text, std::path::Path::new("the results' `lighting`")),
+        }
+    }
 }
 
 fn sphere() -> Scene {
@@ -189,6 +206,7 @@ pub fn run(
     let mut renderer = Renderer::new(gpu, equirect, EnvDesc::default())?;
     let layers: Vec<Vec<LayerParams>> = cases.iter().map(|c| c.stack.params()).collect();
     place_scene(&mut renderer, config.scene, config.width, config.height)?;
+    renderer.lighting = config.lighting.clone();
     let mut passes: Vec<ForwardPass> = Vec::new();
     let mut pass_of = Vec::with_capacity(cases.len());
     for (case, stack) in cases.iter().zip(&layers) {
@@ -251,6 +269,7 @@ pub fn run(
         lp_num_threads: std::env::var("LP_NUM_THREADS").ok(),
         scene: config.scene,
         counter: None,
+        lighting: (config.lighting != Lighting::default()).then(|| config.lighting.to_toml()),
         runs: cases
             .iter()
             .zip(&pass_of)

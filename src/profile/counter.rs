@@ -27,6 +27,7 @@ use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
 use crate::material::Stack;
 use crate::render::forward::ForwardPass;
+use crate::render::lights::Lighting;
 use crate::render::scene::{Camera, Scene};
 use crate::render::{Renderer, ShadedPhase};
 use crate::size::Size;
@@ -125,6 +126,7 @@ pub fn worker(
     equirect: &HdrImage,
     cases: &[Case],
     scene: Scene,
+    lighting: &Lighting,
     sizes: &[Size],
 ) -> Result<()> {
     if !callgrind::running() {
@@ -135,6 +137,7 @@ pub fn worker(
         ));
     }
     let mut renderer = Renderer::new(gpu, equirect, WORKER_ENV)?;
+    renderer.lighting = lighting.clone();
     let mut passes: Vec<ForwardPass> = Vec::new();
     for case in cases {
         let layers = case.stack.params();
@@ -217,7 +220,8 @@ pub fn add_counts(
 }
 
 /// [`add_counts`] for several result sets at once, in one pool of workers (a suite's studies:
-/// each worker starts once and compiles each shader once). Every set must have the same scene.
+/// each worker starts once and compiles each shader once). Every set must have the same scene
+/// and lighting.
 pub fn add_counts_to_all(
     batches: &mut [(&mut Results, &[Case])],
     setup: &CounterSetup,
@@ -232,6 +236,12 @@ pub fn add_counts_to_all(
             "one count covers one scene; got {scene} and {}",
             other.scene
         )));
+    }
+    let lighting = batches[0].0.lighting.clone();
+    if batches.iter().any(|(r, _)| r.lighting != lighting) {
+        return Err(Error::Unsupported(
+            "one count covers one lighting; the result sets were drawn under different ones".into(),
+        ));
     }
     // The renderers of the bench and of the worker look through the default camera.
     let camera = Camera::default();
@@ -257,6 +267,7 @@ pub fn add_counts_to_all(
             env_map: &setup.env_map,
             cases: &cases,
             scene,
+            lighting: lighting.as_deref(),
             sizes: &sizes.both(),
         },
         progress,
@@ -296,6 +307,8 @@ pub struct CountRequest<'a> {
     pub env_map: &'a Path,
     pub cases: &'a [Case],
     pub scene: Scene,
+    /// The lighting file's text (`Results::lighting`); `None`: the environment alone.
+    pub lighting: Option<&'a str>,
     /// The resolutions each case is drawn and counted at, in order.
     pub sizes: &'a [Size],
 }
@@ -335,6 +348,7 @@ pub fn count_instructions(
                     env_map: request.env_map,
                     cases,
                     scene: request.scene,
+                    lighting: request.lighting,
                     sizes: request.sizes,
                 };
                 scope.spawn(move || {
@@ -401,9 +415,13 @@ fn shader_groups(cases: &[Case], workers: usize) -> Vec<Vec<usize>> {
 }
 
 /// Writes the worker's job file (the cases' variants and stacks) into `dir`.
-fn write_job(dir: &Path, cases: &[Case]) -> Result<PathBuf> {
+fn write_job(dir: &Path, cases: &[Case], lighting: Option<&str>) -> Result<PathBuf> {
     let stacks = dir.join("stacks.json");
-    let job = serde_json::to_string(&WorkerJob::from_cases(cases))
+    let job = WorkerJob {
+        lighting: lighting.map(str::to_owned),
+        ..WorkerJob::from_cases(cases)
+    };
+    let job = serde_json::to_string(&job)
         .map_err(|e| Error::Unsupported(format!("encoding the worker's job: {e}")))?;
     std::fs::write(&stacks, job).map_err(|e| io_error(&stacks, e))?;
     Ok(stacks)
@@ -428,7 +446,7 @@ fn run_worker(
     dir: &Path,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<Vec<Counts>>> {
-    let stacks = write_job(dir, request.cases)?;
+    let stacks = write_job(dir, request.cases, request.lighting)?;
     let out_file = dir.join("callgrind.out");
     let mut command = Command::new("valgrind");
     command
@@ -600,6 +618,9 @@ fn parse_dump(text: &str) -> Option<((usize, usize), Counts)> {
 #[derive(serde::Serialize, serde::Deserialize)]
 pub struct WorkerJob {
     pub cases: Vec<WorkerCase>,
+    /// The lighting file's text; absent: the environment alone.
+    #[serde(default)]
+    pub lighting: Option<String>,
 }
 
 #[derive(serde::Serialize, serde::Deserialize)]
@@ -647,6 +668,23 @@ impl WorkerJob {
                     stack_toml: c.stack.to_toml(),
                 })
                 .collect(),
+            lighting: None,
+        }
+    }
+
+    /// The lighting of the job file at `path`.
+    pub fn read_lighting(path: &Path) -> Result<Lighting> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::Input {
+            path: path.to_owned(),
+            message: format!("cannot read the counter job: {e}"),
+        })?;
+        let job: Self = serde_json::from_str(&text).map_err(|e| Error::Input {
+            path: path.to_owned(),
+            message: format!("not a counter job ({e})"),
+        })?;
+        match job.lighting {
+            None => Ok(Lighting::default()),
+            Some(text) => Lighting::parse(&text, path),
         }
     }
 }

@@ -355,6 +355,7 @@ mod tests {
                 lp_num_threads: None,
                 scene: crate::render::scene::Scene::FullScreen,
                 counter: None,
+                lighting: None,
                 runs,
             },
         }

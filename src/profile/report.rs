@@ -1339,6 +1339,7 @@ mod tests {
                 lp_num_threads: Some("0".into()),
                 scene: crate::render::scene::Scene::Sphere,
                 counter: None,
+                lighting: None,
                 runs: vec![
                     run(&key("model=ggx"), 1.0, 2_000_000, 8_000_000),
                     // 34 M outside the JIT code against the baseline's 6 M: rebuilt.
@@ -1441,6 +1442,7 @@ mod tests {
                     sizes: [[48, 48], [96, 96]],
                     shaded_pixels: [2304, 9216],
                 }),
+                lighting: None,
                 runs: vec![
                     counted("model=ggx", 1_000_000, 300.0, 1.0),
                     counted("model=tm2,max_layers=4", 5_000_000, 2400.0, 8.0),
@@ -1541,6 +1543,7 @@ mod tests {
                     sizes: [[24, 24], [48, 48]],
                     shaded_pixels: [300, 1200],
                 }),
+                lighting: None,
                 runs,
             },
             meta: StudyMeta {

@@ -39,6 +39,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::imageio::write_file_atomically;
 use crate::material::Stack;
+use crate::render::lights::{Lighting, PRESETS};
 use crate::render::scene::Scene;
 use crate::size::Size;
 use crate::variant::{VariantKey, AXES};
@@ -59,11 +60,14 @@ pub struct SweepFile {
     pub title: Option<String>,
     pub description: Option<String>,
     /// A suite: sweep files (relative to this one) run in order, with this file's `scene`,
-    /// `size`, `frames`, `warmup`, `counter` and `counter_sizes` overriding theirs.
+    /// `size`, `frames`, `warmup`, `counter`, `counter_sizes` and `lights` overriding theirs.
     pub studies: Option<Vec<String>>,
     pub materials: Option<Vec<String>>,
     pub base: Option<String>,
     pub scene: Option<String>,
+    /// A lighting file (relative to this one) or preset (`render::lights`): the environment's
+    /// scale and the analytic lights. Absent: the environment alone.
+    pub lights: Option<String>,
     pub size: Option<String>,
     pub frames: Option<u32>,
     pub warmup: Option<u32>,
@@ -156,6 +160,7 @@ pub struct Study {
     pub file: PathBuf,
     pub source_text: String,
     pub scene: Scene,
+    pub lighting: Lighting,
     pub width: u32,
     pub height: u32,
     pub frames: u32,
@@ -227,6 +232,7 @@ pub fn load(file: &Path) -> Result<(Vec<Study>, bool)> {
             }
             let overrides = Overrides {
                 scene: sweep.scene.clone(),
+                lights: sweep.lights.as_ref().map(|l| (file.to_owned(), l.clone())),
                 size: sweep.size.clone(),
                 frames: sweep.frames,
                 warmup: sweep.warmup,
@@ -259,6 +265,8 @@ pub fn load(file: &Path) -> Result<(Vec<Study>, bool)> {
 #[derive(Default)]
 struct Overrides {
     scene: Option<String>,
+    /// The suite's file and its `lights`.
+    lights: Option<(PathBuf, String)>,
     size: Option<String>,
     frames: Option<u32>,
     warmup: Option<u32>,
@@ -368,6 +376,22 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
     let scene = match over.scene.as_ref().or(sweep.scene.as_ref()) {
         None => DEFAULT_SCENE,
         Some(text) => text.parse().map_err(|e: String| bad(file, "scene", &e))?,
+    };
+    let lights = over
+        .lights
+        .clone()
+        .or_else(|| sweep.lights.as_ref().map(|l| (file.to_owned(), l.clone())));
+    let lighting = match lights {
+        None => Lighting::default(),
+        Some((owner, spec)) => {
+            let spec = if PRESETS.contains(&spec.as_str()) || Path::new(&spec).is_absolute() {
+                spec
+            } else {
+                let dir = owner.parent().unwrap_or(Path::new("."));
+                dir.join(&spec).to_string_lossy().into_owned()
+            };
+            Lighting::load(&spec).map_err(|e| bad(&owner, "lights", &e.to_string()))?
+        }
     };
     let frames = over.frames.or(sweep.frames).unwrap_or(10);
     if frames == 0 {
@@ -600,6 +624,7 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
         file: file.to_owned(),
         source_text,
         scene,
+        lighting,
         width,
         height,
         frames,
@@ -799,6 +824,7 @@ pub fn time(
         height: study.height,
         frames: study.frames,
         warmup: study.warmup,
+        lighting: study.lighting.clone(),
     };
     let cases = config.with_baselines();
     let results = super::bench::run(gpu, equirect, &config, |done, total| {

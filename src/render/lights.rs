@@ -163,6 +163,36 @@ impl Lighting {
         Ok(self)
     }
 
+    /// The lighting as a lighting file ([`Lighting::parse`] reads it back): what result files
+    /// record and the instruction counter's worker receives.
+    pub fn to_toml(&self) -> String {
+        let v = |v: [f64; 3]| format!("[{:?}, {:?}, {:?}]", v[0], v[1], v[2]);
+        let mut out = format!("environment = {:?}\n", self.environment);
+        for light in &self.lights {
+            out.push_str("\n[[light]]\n");
+            match light.kind {
+                LightKind::Directional {
+                    direction,
+                    angular_radius,
+                } => {
+                    out.push_str("kind = \"directional\"\n");
+                    out.push_str(&format!("direction = {}\n", v(direction)));
+                    out.push_str(&format!(
+                        "angular_radius = {:?}\n",
+                        angular_radius.to_degrees()
+                    ));
+                }
+                LightKind::Point { position } => {
+                    out.push_str("kind = \"point\"\n");
+                    out.push_str(&format!("position = {}\n", v(position)));
+                }
+            }
+            out.push_str(&format!("color = {}\n", v(light.color)));
+            out.push_str(&format!("intensity = {:?}\n", light.intensity));
+        }
+        out
+    }
+
     /// A short description for result files and logs: `env 1 + sun` style.
     pub fn describe(&self) -> String {
         let mut parts = vec![format!("environment ×{}", self.environment)];
@@ -391,6 +421,38 @@ mod tests {
         );
         assert_eq!(l.lights[1].intensity, 4.0);
         assert_eq!(l.lights[1].color, [1.0, 0.5, 0.0]);
+    }
+
+    #[test]
+    fn a_lighting_survives_its_toml() {
+        let l = Lighting::load("studio-keys").unwrap();
+        let back = Lighting::parse(&l.to_toml(), Path::new("x.toml")).unwrap();
+        assert_eq!(back.lights.len(), l.lights.len());
+        for (a, b) in back.lights.iter().zip(&l.lights) {
+            assert_eq!(a.color, b.color);
+            assert_eq!(a.intensity, b.intensity);
+            match (a.kind, b.kind) {
+                (LightKind::Point { position: p }, LightKind::Point { position: q }) => {
+                    assert_eq!(p, q)
+                }
+                (
+                    LightKind::Directional {
+                        direction: d,
+                        angular_radius: r,
+                    },
+                    LightKind::Directional {
+                        direction: e,
+                        angular_radius: s,
+                    },
+                ) => {
+                    assert!((r - s).abs() < 1e-15);
+                    for c in 0..3 {
+                        assert!((d[c] - e[c]).abs() < 1e-15);
+                    }
+                }
+                _ => panic!("kinds differ"),
+            }
+        }
     }
 
     #[test]

@@ -11,6 +11,7 @@ use crate::tables::environment::EnvDesc;
 use crate::text::TextFont;
 use crate::variant::VariantKey;
 
+use super::lights::Lighting;
 use super::renderer::Renderer;
 
 /// One row of the sheet.
@@ -120,9 +121,11 @@ pub fn render(
     columns: &[Column],
     tile: u32,
     exposure_ev: f32,
+    lighting: &Lighting,
 ) -> Result<(usize, usize, Vec<u8>)> {
     check_exposure(exposure_ev)?;
     let mut renderer = Renderer::new(gpu, equirect, EnvDesc::default())?;
+    renderer.lighting = lighting.clone();
     // A generic column's pass shades every row; a per-material one is built per tile.
     let first = rows.first().map(|r| r.layers.as_slice()).unwrap_or(&[]);
     let mut passes = columns

@@ -65,6 +65,8 @@ pub struct ViewOptions {
     pub save_stack: Option<PathBuf>,
     pub instance: InstanceDesc,
     pub selector: DeviceSelector,
+    /// The environment's scale and the analytic lights (`--lights`, `--light`).
+    pub lighting: crate::render::lights::Lighting,
 }
 
 /// What a run did, for the command's summary and the tests.
@@ -289,6 +291,7 @@ impl App<'_> {
                 layers: self.panels.stack.params(),
                 variant: self.panels.variant_for_scene(),
                 camera: self.panels.camera(),
+                lighting: self.panels.lighting.clone(),
                 width,
                 height,
                 environment,

@@ -32,6 +32,8 @@ pub enum Action {
 
 pub struct Panels {
     pub stack: Stack,
+    /// The lighting every frame is drawn under.
+    pub lighting: crate::render::lights::Lighting,
     /// What the variant panel asks for.
     requested: VariantKey,
     /// What the current pipeline was built from (`None` before the first build).
@@ -86,6 +88,7 @@ impl Panels {
         Ok(Self {
             artist: vec![None; options.stack.layers.len()],
             stack: options.stack.clone(),
+            lighting: options.lighting.clone(),
             requested: options.variant,
             compiled: None,
             builds: 0,

@@ -31,6 +31,7 @@ pub struct Request {
     pub layers: Vec<LayerParams>,
     pub variant: VariantKey,
     pub camera: Camera,
+    pub lighting: crate::render::lights::Lighting,
     pub width: u32,
     pub height: u32,
     /// A new environment map to prefilter first.
@@ -146,6 +147,7 @@ fn step(
         return Ok(None);
     }
     renderer.camera = request.camera;
+    renderer.lighting = request.lighting.clone();
     if compiled {
         // llvmpipe compiles the shader at its first draw: keep that out of the history.
         renderer.render(pass, &request.layers, request.width, request.height)?;
