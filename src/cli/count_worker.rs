@@ -25,8 +25,7 @@ pub struct CountWorkerArgs {
 }
 
 pub fn run(global: &GlobalArgs, args: &CountWorkerArgs) -> Result<()> {
-    let cases = WorkerJob::read_cases(&args.job)?;
-    let lighting = WorkerJob::read_lighting(&args.job)?;
+    let (cases, lighting) = WorkerJob::read(&args.job)?;
     let equirect = imageio::read_exr(&args.env).context("reading the environment map")?;
     let gpu = global.open_gpu()?;
     counter::worker(&gpu, &equirect, &cases, args.scene, &lighting, &args.sizes)?;

@@ -632,8 +632,9 @@ pub struct WorkerCase {
 }
 
 impl WorkerJob {
-    /// The cases of the job file at `path`, as the parent wrote them ([`count_instructions`]).
-    pub fn read_cases(path: &Path) -> Result<Vec<Case>> {
+    /// The cases and the lighting of the job file at `path`, as the parent wrote them
+    /// ([`count_instructions`]).
+    pub fn read(path: &Path) -> Result<(Vec<Case>, Lighting)> {
         let input_error = |message: String| Error::Input {
             path: path.to_owned(),
             message,
@@ -642,7 +643,8 @@ impl WorkerJob {
             .map_err(|e| input_error(format!("cannot read the counter job: {e}")))?;
         let job: Self = serde_json::from_str(&text)
             .map_err(|e| input_error(format!("not a counter job ({e})")))?;
-        job.cases
+        let cases = job
+            .cases
             .iter()
             .map(|c| {
                 let stack = Stack::from_toml(&c.stack_toml, path)?;
@@ -655,7 +657,12 @@ impl WorkerJob {
                     },
                 })
             })
-            .collect()
+            .collect::<Result<_>>()?;
+        let lighting = match job.lighting {
+            None => Lighting::default(),
+            Some(text) => Lighting::parse(&text, path)?,
+        };
+        Ok((cases, lighting))
     }
 
     fn from_cases(cases: &[Case]) -> Self {
@@ -669,22 +676,6 @@ impl WorkerJob {
                 })
                 .collect(),
             lighting: None,
-        }
-    }
-
-    /// The lighting of the job file at `path`.
-    pub fn read_lighting(path: &Path) -> Result<Lighting> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::Input {
-            path: path.to_owned(),
-            message: format!("cannot read the counter job: {e}"),
-        })?;
-        let job: Self = serde_json::from_str(&text).map_err(|e| Error::Input {
-            path: path.to_owned(),
-            message: format!("not a counter job ({e})"),
-        })?;
-        match job.lighting {
-            None => Ok(Lighting::default()),
-            Some(text) => Lighting::parse(&text, path),
         }
     }
 }

@@ -192,15 +192,6 @@ impl Lighting {
         }
         out
     }
-
-    /// A short description for result files and logs: `env 1 + sun` style.
-    pub fn describe(&self) -> String {
-        let mut parts = vec![format!("environment ×{}", self.environment)];
-        for light in &self.lights {
-            parts.push(light.describe());
-        }
-        parts.join(" + ")
-    }
 }
 
 impl Light {
@@ -262,22 +253,6 @@ impl Light {
         }
         table.insert("intensity".into(), Value::Float(intensity));
         read_light(&table)
-    }
-
-    fn describe(&self) -> String {
-        let v = |v: [f64; 3]| format!("{},{},{}", v[0], v[1], v[2]);
-        match self.kind {
-            LightKind::Directional {
-                direction,
-                angular_radius,
-            } => format!(
-                "directional {} ×{} r={}°",
-                v(direction),
-                self.intensity,
-                angular_radius.to_degrees()
-            ),
-            LightKind::Point { position } => format!("point {} ×{}", v(position), self.intensity),
-        }
     }
 }
 
