@@ -8,6 +8,8 @@
 // every transfer-matrix variant is divided by. MODEL = tm2 / tm6: the lobes of the
 // transfer-matrix model (lib/tm2.glsl, lib/tm6.glsl), or under MODE_BAKED the material's lobes
 // read from its table (bindings/shading.glsl's baked_lobes) at the view cosine.
+// This entry point has texture coordinates: the models read a varying stack's maps.
+#define TM_SURFACE_MAPS
 #include "shared/variant.glsl"
 #include "bindings/shading.glsl"
 #include "bindings/scene.glsl"
@@ -19,6 +21,7 @@
 
 layout(location = 0) in vec3 world_position;
 layout(location = 1) in vec3 world_normal;
+layout(location = 2) in vec2 surface_uv;
 layout(location = 0) out vec4 color;
 
 // The point being shaded: the models emit their lobes one by one (tm_emit_lobe) and each is
@@ -128,6 +131,9 @@ void main() {
     vec3 v = normalize(frame.camera_pos.xyz - world_position);
     float n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
     shade_begin(world_position, n, v, n_dot_v);
+    if (SURFACE_MAPS != 0u) {
+        tm_surface_begin(surface_uv, gl_FragCoord.xy);
+    }
     vec3 radiance;
     if (MODEL == MODEL_GGX) {
         radiance = shade_ggx(n, v, n_dot_v);

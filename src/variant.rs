@@ -286,6 +286,10 @@ pub struct ShadeSpec {
     pub retro_mask: u32,
     /// `baked`: view-cosine samples per lobe.
     pub baked_size: u32,
+    /// 1: the stack varies over the surface (`material::surface`): the forward pass reads its
+    /// maps and each pixel's covered layers. A property of the material, not an axis: a
+    /// generic pass is built per (variant, varying or not).
+    pub surface_maps: u32,
     /// `specialized-values`: the layers' values (see [`LAYER_VALUES`]).
     pub values: [[f32; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
 }
@@ -296,7 +300,7 @@ impl Default for ShadeSpec {
     }
 }
 
-const AXIS_ENTRIES: usize = 18;
+const AXIS_ENTRIES: usize = 19;
 const VALUE_ENTRIES: usize = (MAX_LAYERS_LIMIT * VALUES_PER_LAYER) as usize;
 
 const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENTRIES] {
@@ -305,7 +309,7 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
         offset: 0,
         size: 4,
     }; AXIS_ENTRIES + VALUE_ENTRIES];
-    // ids 0…17 are the u32 fields in declaration order, 4 bytes apart from offset 0.
+    // ids 0…18 are the u32 fields in declaration order, 4 bytes apart from offset 0.
     let mut i = 0;
     while i < AXIS_ENTRIES {
         out[i].id = i as u32;
@@ -321,7 +325,7 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
     out
 }
 
-const _: () = assert!(std::mem::offset_of!(ShadeSpec, baked_size) == 4 * (AXIS_ENTRIES - 1));
+const _: () = assert!(std::mem::offset_of!(ShadeSpec, surface_maps) == 4 * (AXIS_ENTRIES - 1));
 
 impl crate::vk::SpecConstants for ShadeSpec {
     const ENTRIES: &'static [crate::vk::SpecEntry] = &shade_spec_entries();
@@ -348,6 +352,7 @@ impl VariantKey {
             lobe_count: 0,
             retro_mask: 0,
             baked_size: 0,
+            surface_maps: 0,
             values: [[0.0; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
         }
     }
@@ -546,6 +551,10 @@ mod tests {
         assert_eq!(
             entries[17].offset,
             std::mem::offset_of!(ShadeSpec, baked_size)
+        );
+        assert_eq!(
+            entries[18].offset,
+            std::mem::offset_of!(ShadeSpec, surface_maps)
         );
         let last = entries.last().unwrap();
         assert_eq!(last.id, VALUE_ID_BASE + VALUE_ENTRIES as u32 - 1);

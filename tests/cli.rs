@@ -765,3 +765,91 @@ fn simplify_says_when_there_is_nothing_to_simplify() {
     assert!(!out.status.success());
     assert!(stderr(&out).contains("unobtainium"), "{}", stderr(&out));
 }
+
+#[test]
+fn bad_maps_are_named_and_nothing_is_written() {
+    let dir = common::scratch_dir("cli-bad-maps");
+    let input = common::scratch_dir("cli-bad-maps-input");
+    // An RGB image for a scalar field without `channel`, and a grey one for an RGB field.
+    let write_png = |name: &str, color: png::ColorType, samples: usize| {
+        let file = std::fs::File::create(input.join(name)).unwrap();
+        let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), 4, 4);
+        encoder.set_color(color);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header().unwrap();
+        writer.write_image_data(&vec![128; 16 * samples]).unwrap();
+    };
+    write_png("rgb.png", png::ColorType::Rgb, 3);
+    write_png("grey.png", png::ColorType::Grayscale, 1);
+    std::fs::write(input.join("broken.png"), b"not a png at all").unwrap();
+    let gold = "ior = [0.143, 0.374, 1.442]\nkappa = [3.983, 2.385, 1.603]\nroughness = 0.2\n";
+    let cases: [(&str, &str, &[&str]); 9] = [
+        (
+            "missing.toml",
+            "roughness = { texture = \"nowhere.png\", space = \"linear\" }",
+            &["missing.toml", "layer 1", "`roughness.texture`", "nowhere.png", "no such file"],
+        ),
+        (
+            "unreadable.toml",
+            "roughness = { texture = \"broken.png\", space = \"linear\" }",
+            &["unreadable.toml", "`roughness.texture`", "broken.png", "not a readable PNG"],
+        ),
+        (
+            "channels.toml",
+            "roughness = { texture = \"rgb.png\", space = \"linear\" }",
+            &["channels.toml", "`roughness.channel`", "rgb.png has 3 channels"],
+        ),
+        (
+            "grey-rgb.toml",
+            "roughness = 0.1\nior = { texture = \"grey.png\", space = \"srgb\", range = [1.3, 1.7] }",
+            &["grey-rgb.toml", "`ior.texture`", "1 channel(s)", "RGB or RGBA"],
+        ),
+        (
+            "space.toml",
+            "roughness = { texture = \"grey.png\" }",
+            &["space.toml", "`roughness.space`", "colour space"],
+        ),
+        (
+            "scale.toml",
+            "roughness = { pattern = \"noise\", scale = 0 }",
+            &["scale.toml", "`roughness.scale`", "[1, 4096]"],
+        ),
+        (
+            "octaves.toml",
+            "roughness = 0.1\ncoverage = { pattern = \"noise\", octaves = 9 }",
+            &["octaves.toml", "`coverage.octaves`", "[1, 8]"],
+        ),
+        (
+            "threshold.toml",
+            "roughness = 0.1\ncoverage = { pattern = \"checker\", threshold = 1.5 }",
+            &["threshold.toml", "`coverage.threshold`", "1.5", "[0, 1]"],
+        ),
+        (
+            "range.toml",
+            "roughness = 0.1\nior = { pattern = \"checker\", scale = 2 }",
+            &["range.toml", "`ior.range`", "missing", "[0.001, 400]"],
+        ),
+    ];
+    for (name, fields, expected) in cases {
+        let path = input.join(name);
+        let text = format!("[[layer]]\nior = [1.5, 1.5, 1.5]\n{fields}\n[[layer]]\n{gold}");
+        // A case that gives `ior` itself replaces the constant one.
+        let text = if fields.contains("ior =") {
+            text.replacen("ior = [1.5, 1.5, 1.5]\n", "", 1)
+        } else {
+            text
+        };
+        std::fs::write(&path, text).unwrap();
+        assert_rejected(&["--material", path.to_str().unwrap()], &dir, expected);
+    }
+    assert_rejected(
+        &[
+            "--material",
+            "worn-lacquered-copper",
+            "--variant",
+            "mode=specialized",
+        ],
+        &dir,
+        &["varies over the surface", "mode=generic"],
+    );
+}

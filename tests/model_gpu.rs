@@ -123,6 +123,7 @@ fn every_preset_renders_in_tm2_and_tm6() {
             sheet::SheetRow {
                 name: stack.name.clone(),
                 layers: stack.params(),
+                surface: stack.surface.clone(),
             }
         })
         .collect();

@@ -487,15 +487,27 @@ fn material_and_frame_blocks_have_the_host_layout() {
             offsets(&spirv, material),
             [
                 at(offset_of!(MaterialGpu, info)),
-                at(offset_of!(MaterialGpu, layers))
+                at(offset_of!(MaterialGpu, layers)),
+                at(offset_of!(MaterialGpu, maps))
             ]
         );
         let (layer, stride, length) = array(&spirv, spirv.members(material)[1].ty);
         assert_eq!(stride, at(size_of::<LayerGpu>()), "layer stride");
         assert_eq!(
             (offset_of!(MaterialGpu, layers) + length as usize * size_of::<LayerGpu>()),
-            size_of::<MaterialGpu>(),
+            offset_of!(MaterialGpu, maps),
             "layer count"
+        );
+        let (_, stride, maps) = array(&spirv, spirv.members(material)[2].ty);
+        assert_eq!(
+            (stride, maps),
+            (16, length),
+            "one uvec4 of map codes per layer"
+        );
+        assert_eq!(
+            offset_of!(MaterialGpu, maps) + maps as usize * 16,
+            size_of::<MaterialGpu>(),
+            "map codes"
         );
         assert_eq!(
             offsets(&spirv, layer),

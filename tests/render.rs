@@ -136,6 +136,7 @@ fn scenes_shade_the_pixels_they_count_and_full_screen_shades_all() {
             Vertex {
                 position: [0.0; 3],
                 normal: [0.0, 0.0, 1.0],
+                uv: [0.0; 2],
             };
             3
         ],

@@ -41,6 +41,7 @@ pub fn run(global: &GlobalArgs, args: &BakeErrorArgs) -> Result<()> {
         anyhow::bail!("--image-size {}: must be in 8..=2048", args.image_size);
     }
     let (stack, variant) = resolve_with_variant(&args.material, args.variant.as_deref())?;
+    stack.require_uniform("`lamina bake-error`")?;
     let env_path = asset_path(&args.env.env);
     let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
     let gpu = global.open_gpu()?;

@@ -47,6 +47,7 @@ pub struct EvalArgs {
 
 pub fn run(global: &GlobalArgs, args: &EvalArgs) -> Result<()> {
     let (stack, variant) = resolve_with_variant(&args.material, args.variant.as_deref())?;
+    stack.require_uniform("`lamina eval`")?;
     if let Some(c) = args
         .cosines
         .iter()

@@ -25,6 +25,7 @@ pub fn run(global: &GlobalArgs, args: &FurnaceArgs) -> Result<()> {
         anyhow::bail!("--bins {}: must be in 1..=256", args.bins);
     }
     let (stack, variant) = resolve_with_variant(&args.material, args.variant.as_deref())?;
+    stack.require_uniform("`lamina furnace`")?;
     let gpu = global.open_gpu()?;
     let layers = stack.params();
     let bins = furnace::gpu(&gpu, variant, &layers, 256, args.bins)?;

@@ -51,6 +51,7 @@ pub fn run(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
     print_pipelines(&mut gpu, None);
     let mut renderer = Renderer::new(&gpu, &equirect, EnvDesc::default())?;
     renderer.lighting = scene.lights.lighting()?;
+    renderer.set_surface(stack.surface.as_ref())?;
     let pass = renderer.prepare(variant, &layers)?;
     let (width, height) = (scene.size.width, scene.size.height);
     for _ in 0..args.warmup {

@@ -24,6 +24,7 @@ pub struct SimplifyArgs {
 
 pub fn run(args: &SimplifyArgs) -> Result<()> {
     let stack = Stack::resolve(&args.material)?;
+    stack.require_uniform("`lamina simplify`")?;
     let simplified = simplify(&stack);
     if let Some(path) = &args.out {
         simplified.stack.save(path)?;

@@ -1,12 +1,14 @@
 //! Validation of one `[[layer]]` table into [`LayerParams`]: keys, types, lengths, ranges (the
 //! table in the module docs), the interface form and the medium rules.
 
+use std::cell::{Cell, RefCell};
 use std::ops::RangeInclusive;
 use std::path::Path;
 
 use toml::{Table, Value};
 
 use super::artist::gulbrandsen;
+use super::surface::{Coords, Field, LayerSurface, Shape, Source, SourceReader};
 use super::MaterialError;
 use crate::model::LayerParams;
 use crate::variant::Model;
@@ -21,6 +23,7 @@ const LAYER_KEYS: &[&str] = &[
     "sigma_s",
     "sigma_a",
     "g",
+    "coverage",
 ];
 const MEDIUM_KEYS: &[&str] = &["depth", "sigma_s", "sigma_a", "g"];
 const CHANNELS: [&str; 3] = ["R", "G", "B"];
@@ -70,11 +73,15 @@ pub(super) struct LayerReader<'a> {
     pub is_last: bool,
     pub model: Model,
     pub table: &'a Table,
+    /// The maps found so far (fields given as tables).
+    pub sources: RefCell<Vec<(Field, Source)>>,
+    /// The artist form's (f0, edge tint), a map's middle where one varies.
+    pub artist_base: Cell<Option<([f64; 3], [f64; 3])>>,
 }
 
 impl LayerReader<'_> {
-    /// The validated layer.
-    pub fn read(&self) -> Result<LayerParams, MaterialError> {
+    /// The validated layer (maps read at their range's middle) and its maps.
+    pub fn read(&self) -> Result<(LayerParams, LayerSurface), MaterialError> {
         self.check_keys()?;
         let (ior, kappa) = self.interface()?;
         let roughness = self.scalar("roughness", &UNIT)?.ok_or_else(|| {
@@ -93,7 +100,62 @@ impl LayerReader<'_> {
             g: self.scalar("g", &HG_G)?.unwrap_or(0.0),
         };
         self.check_conductor_and_medium(&layer)?;
-        Ok(layer)
+        self.coverage()?;
+        let sources = self.sources.take();
+        let artist = self.artist_base.get().filter(|_| {
+            sources
+                .iter()
+                .any(|(f, _)| matches!(f, Field::F0 | Field::EdgeTint))
+        });
+        Ok((layer, LayerSurface { sources, artist }))
+    }
+
+    /// `coverage`: a number in [0, 1] (one value everywhere) or a map.
+    fn coverage(&self) -> Result<(), MaterialError> {
+        let Some(value) = self.table.get("coverage") else {
+            return Ok(());
+        };
+        if let Value::Table(_) = value {
+            self.scalar("coverage", &UNIT)?;
+            return Ok(());
+        }
+        let c = self.number("coverage", None, value, &UNIT)?;
+        self.sources.borrow_mut().push((
+            Field::Coverage,
+            Source {
+                shape: Shape::Uniform(c),
+                threshold: None,
+                range: [[0.0; 3], [1.0; 3]],
+                coords: Coords::Uv,
+                table: value.clone(),
+            },
+        ));
+        Ok(())
+    }
+
+    /// A map given in place of `field`'s value, recorded; its base value is the middle of
+    /// its range.
+    fn source(&self, field: &str, table: &Table, range: &Range) -> Result<[f64; 3], MaterialError> {
+        let field_id = Field::from_key(field).expect("a layer key");
+        let allowed = |v: f64| range.contains(v);
+        let default_range = (*range.span.start() >= 0.0 && *range.span.end() <= 1.0)
+            .then(|| [*range.span.start(), *range.span.end()]);
+        let source = SourceReader {
+            path: self.path,
+            layer: self.index,
+            field: field_id,
+            table,
+            allowed: (&allowed, range.text),
+            default_range,
+        }
+        .read()?;
+        let [lo, hi] = source.range;
+        let middle = [0, 1, 2].map(|c| 0.5 * (lo[c] + hi[c]));
+        let mut sources = self.sources.borrow_mut();
+        if !sources.iter().any(|(f, _)| *f == field_id) {
+            sources.push((field_id, source));
+        }
+        Ok(middle)
     }
 
     fn error(&self, field: &str, message: impl Into<String>) -> MaterialError {
@@ -179,10 +241,11 @@ impl LayerReader<'_> {
     }
 
     fn scalar(&self, field: &str, range: &Range) -> Result<Option<f64>, MaterialError> {
-        self.table
-            .get(field)
-            .map(|v| self.number(field, None, v, range))
-            .transpose()
+        match self.table.get(field) {
+            None => Ok(None),
+            Some(Value::Table(t)) => Ok(Some(self.source(field, t, range)?[0])),
+            Some(v) => self.number(field, None, v, range).map(Some),
+        }
     }
 
     fn rgb(&self, field: &str, range: &Range) -> Result<Option<[f64; 3]>, MaterialError> {
@@ -190,6 +253,7 @@ impl LayerReader<'_> {
             return Ok(None);
         };
         let items = match value {
+            Value::Table(t) => return Ok(Some(self.source(field, t, range)?)),
             Value::Array(items) if items.len() == 3 => items,
             Value::Array(items) => {
                 let found = items.len();
@@ -248,6 +312,7 @@ impl LayerReader<'_> {
                 format!("missing (f0 needs edge_tint), in {}", UNIT.text),
             )
         })?;
+        self.artist_base.set(Some((f0, tint)));
         let (mut ior, mut kappa) = ([0.0; 3], [0.0; 3]);
         for c in 0..3 {
             (ior[c], kappa[c]) = gulbrandsen(f0[c], tint[c]);

@@ -54,12 +54,14 @@ pub mod random;
 pub mod simplify;
 #[cfg(test)]
 mod simplify_properties;
+pub mod surface;
 #[cfg(test)]
 mod tests;
 mod variant;
 mod write;
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use crate::imageio::{self, ImageIoError};
 use crate::model::LayerParams;
@@ -67,6 +69,7 @@ use crate::variant::{Model, VariantError};
 
 pub use artist::gulbrandsen;
 pub use presets::presets;
+pub use surface::Surface;
 pub use variant::{base_variant, resolve_with_variant};
 
 /// A named stack of layers, top first, with the model it is meant for.
@@ -80,6 +83,10 @@ pub struct Stack {
     pub layers: Vec<LayerParams>,
     /// The file the stack was read from, named by later errors ([`Stack::check_fits`]).
     pub source: PathBuf,
+    /// Where parameters vary over the surface (textures, patterns, coverage): the maps, baked
+    /// on load; `layers` then holds the constants and each map's middle value. `None` for a
+    /// uniform stack.
+    pub surface: Option<Arc<Surface>>,
 }
 
 /// A material that cannot be read or used, located as precisely as the problem allows.
@@ -162,6 +169,7 @@ impl Stack {
     /// (a five-layer stack at `n = 3` keeps its first two coats; at `n = 7` it repeats them).
     /// Named `NAME @ n layers`. Errs when `n` is 0 or when `n > 1` and the stack has no coat.
     pub fn with_active_layers(&self, n: usize) -> Result<Self, MaterialError> {
+        self.require_uniform("the active_layers axis")?;
         let (substrate, coats) = self
             .layers
             .split_last()
@@ -183,6 +191,29 @@ impl Stack {
             name: format!("{} @ {n} layers", self.name),
             layers,
             ..self.clone()
+        })
+    }
+
+    /// Errs when the stack varies over its surface, naming the first varying field: `what`
+    /// (a command or study) takes one stack for every point.
+    pub fn require_uniform(&self, what: &str) -> Result<(), MaterialError> {
+        let Some(surface) = &self.surface else {
+            return Ok(());
+        };
+        let (layer, field) = surface
+            .layers
+            .iter()
+            .enumerate()
+            .find_map(|(i, l)| l.sources.first().map(|(f, _)| (i, f.key())))
+            .expect("a surface has a source");
+        Err(MaterialError::Field {
+            path: self.source.clone(),
+            layer: layer + 1,
+            field: field.to_owned(),
+            message: format!(
+                "varies over the surface; {what} takes a stack that is the same everywhere \
+                 (render, bench, sweep, sheet and view shade varying stacks)"
+            ),
         })
     }
 

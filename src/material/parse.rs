@@ -8,11 +8,14 @@ use std::path::Path;
 
 use toml::{Table, Value};
 
+use std::sync::Arc;
+
 use super::layer::LayerReader;
+use super::surface::{self, BakeContext, Surface};
 use super::{MaterialError, Stack};
 use crate::variant::{Model, MAX_LAYERS_LIMIT};
 
-const TOP_KEYS: &[&str] = &["name", "model", "layer"];
+const TOP_KEYS: &[&str] = &["name", "model", "map_resolution", "layer"];
 
 fn file_error(path: &Path, message: impl Into<String>) -> MaterialError {
     MaterialError::File {
@@ -34,7 +37,7 @@ pub(super) fn parse(text: &str, path: &Path) -> Result<Stack, MaterialError> {
     let name = name(&table, path)?;
     let model = model(&table, path)?;
     let tables = layer_tables(&table, path)?;
-    let layers = tables
+    let read: Vec<_> = tables
         .iter()
         .enumerate()
         .map(|(index, table)| {
@@ -45,15 +48,30 @@ pub(super) fn parse(text: &str, path: &Path) -> Result<Stack, MaterialError> {
                 is_last,
                 model,
                 table,
+                sources: Default::default(),
+                artist_base: Default::default(),
             }
             .read()
         })
         .collect::<Result<_, _>>()?;
+    let (layers, surfaces): (Vec<_>, Vec<_>) = read.into_iter().unzip();
+    let resolution = surface::resolution(&table, path)?;
+    let varies = surfaces.iter().any(|s| !s.sources.is_empty());
+    if !varies && table.contains_key("map_resolution") {
+        let message = "`map_resolution`: sizes the maps, and no layer has one (a field given \
+                       as a texture or pattern table, or a coverage)";
+        return Err(file_error(path, message));
+    }
+    let surface = varies
+        .then(|| Surface::bake(resolution, surfaces, &layers, &BakeContext { path }))
+        .transpose()?
+        .map(Arc::new);
     Ok(Stack {
         name,
         model,
         layers,
         source: path.to_owned(),
+        surface,
     })
 }
 

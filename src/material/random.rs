@@ -107,6 +107,7 @@ pub fn random_stack(rng: &mut Rng, model: Option<Model>, max_layers: usize) -> (
         model,
         layers,
         source: PathBuf::from("<property test>"),
+        surface: None,
     };
     (stack, mu)
 }

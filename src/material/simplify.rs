@@ -569,6 +569,7 @@ mod tests {
             model,
             layers,
             source: PathBuf::from("<simplify test>"),
+            surface: None,
         }
     }
 

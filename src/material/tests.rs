@@ -40,7 +40,14 @@ fn unknown_layer_key() {
 #[test]
 fn unknown_top_level_key() {
     let m = error(&format!("colour = 1\n[[layer]]\n{GOLD}"));
-    assert_names(&m, &["`colour`", "unknown key", "name, model, layer"]);
+    assert_names(
+        &m,
+        &[
+            "`colour`",
+            "unknown key",
+            "name, model, map_resolution, layer",
+        ],
+    );
 }
 
 #[test]
@@ -298,4 +305,121 @@ fn aluminium_is_the_ggx_baseline_material() {
     assert_eq!(stack.model, Model::Tm2);
     assert_eq!(stack.layers.len(), 1);
     assert!(stack.layers[0].is_conductor());
+}
+
+/// The stack `text` with maps, read from the repository's materials directory (where the
+/// textures' relative paths resolve).
+fn varying(text: &str) -> Stack {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/materials/test.toml");
+    Stack::from_toml(text, &path).unwrap()
+}
+
+#[test]
+fn coverage_zero_and_one_are_the_stacks_without_and_with_the_layer_on_the_cpu() {
+    use crate::model::{fgd::ExactFgd, tm2, NoTir};
+    let text = |coverage: &str| {
+        format!(
+            "map_resolution = 8\n[[layer]]\n{COAT}\n[[layer]]\nior = [1.8, 1.8, 1.8]\nroughness = 0.3\n\
+             coverage = {coverage}\n[[layer]]\n{GOLD}"
+        )
+    };
+    let zero = varying(&text("0"));
+    let one = varying(&text("1"));
+    let maps = |s: &Stack| s.surface.as_ref().unwrap().maps.clone();
+    let fgd = ExactFgd::new(crate::variant::G2::HeightCorrelated);
+    let without = vec![zero.layers[0], zero.layers[2]];
+    for (u, v) in [(0.1, 0.2), (0.7, 0.9), (0.33, 0.5)] {
+        let at_zero = maps(&zero).layers_at(&zero.layers, (u, v), (0, 0));
+        let at_one = maps(&one).layers_at(&one.layers, (u, v), (3, 5));
+        assert_eq!(at_zero, without);
+        assert_eq!(at_one, one.layers);
+        for mu in [0.05, 0.5, 1.0] {
+            let a = tm2::evaluate(&at_zero, mu, &fgd, &NoTir);
+            let b = tm2::evaluate(&without, mu, &fgd, &NoTir);
+            assert_eq!(a.reflectance, b.reflectance);
+        }
+    }
+    assert_eq!(maps(&zero).coverage_fraction(1), 0.0);
+    assert_eq!(maps(&one).coverage_fraction(1), 1.0);
+    // A fractional coverage holds the layer on about that share of the texels.
+    let most = varying(&text("0.7").replace("map_resolution = 8", "map_resolution = 64"));
+    let share = maps(&most).coverage_fraction(1);
+    assert!((share - 0.7).abs() < 0.03, "coverage 0.7 kept {share}");
+}
+
+#[test]
+fn maps_read_their_range_and_round_trip() {
+    let text = "name = \"mapped\"\nmodel = \"tm6\"\nmap_resolution = 16\n[[layer]]\nior = [1.5, 1.5, 1.5]\n\
+                roughness = { pattern = \"noise\", scale = 2, range = [0.1, 0.3] }\n\
+                depth = { pattern = \"cells\", scale = 4, seed = 3, range = [0.2, 0.4] }\n\
+                sigma_s = [1.0, 1.0, 1.0]\n\
+                coverage = { pattern = \"checker\", scale = 4, coords = \"screen\" }\n\
+                [[layer]]\nf0 = { texture = \"../textures/bronze-mottle.png\", space = \"srgb\", range = [0, 0.99] }\n\
+                edge_tint = [0.9, 0.8, 0.6]\n\
+                roughness = { texture = \"../textures/brushed-streaks.png\", space = \"linear\", range = [0.2, 0.5] }\n";
+    let stack = varying(text);
+    let surface = stack.surface.as_ref().unwrap();
+    // Coverage, roughness and depth on layer 1; η, κ (from f0) and roughness on layer 2.
+    assert_eq!(surface.maps.slices.len(), 6);
+    let at = surface.maps.layers_at(&stack.layers, (0.3, 0.6), (1, 0));
+    assert_eq!(
+        at.len(),
+        1,
+        "pixel (1, 0) lies in an uncovered checker cell"
+    );
+    let at = surface.maps.layers_at(&stack.layers, (0.3, 0.6), (5, 0));
+    assert_eq!(at.len(), 2);
+    assert!(
+        (0.1..=0.3).contains(&at[0].roughness),
+        "{}",
+        at[0].roughness
+    );
+    assert!((0.2..=0.4).contains(&at[0].depth), "{}", at[0].depth);
+    assert!(
+        (0.2..=0.5).contains(&at[1].roughness),
+        "{}",
+        at[1].roughness
+    );
+    assert!(at[1].is_conductor());
+    let again = Stack::from_toml(&stack.to_toml(), Path::new("elsewhere/copy.toml")).unwrap();
+    assert_eq!(again.layers, stack.layers);
+    assert_eq!(again.surface, stack.surface);
+}
+
+#[test]
+fn a_kappa_map_that_crosses_zero_and_a_resolution_without_maps_are_refused() {
+    let m = error(&format!(
+        "[[layer]]\n{COAT}\n[[layer]]\nior = [0.2, 0.9, 1.1]\nroughness = 0.2\n\
+         kappa = {{ pattern = \"noise\", range = [0.0, 3.0] }}\n"
+    ));
+    assert_names(
+        &m,
+        &[
+            "layer 2",
+            "`kappa`",
+            "reaches κ = 0",
+            "conductor everywhere or nowhere",
+        ],
+    );
+    let m = error(&format!(
+        "[[layer]]\n{COAT}coverage = {{ pattern = \"checker\", scale = 3 }}\n[[layer]]\n{GOLD}"
+    ));
+    assert_names(&m, &["`coverage.scale`", "even scale"]);
+    let m = error(&format!("map_resolution = 64\n[[layer]]\n{GOLD}"));
+    assert_names(&m, &["`map_resolution`", "no layer has one"]);
+    let m = error(&format!(
+        "[[layer]]\n{COAT}coverage = {{ pattern = \"stripes\" }}\n[[layer]]\n{GOLD}"
+    ));
+    assert_names(
+        &m,
+        &["layer 1", "`coverage.pattern`", "checker", "noise", "cells"],
+    );
+    let m = error(&format!(
+        "[[layer]]\n{COAT}coverage = {{ pattern = \"checker\", colour = 1 }}\n[[layer]]\n{GOLD}"
+    ));
+    assert_names(&m, &["`coverage.colour`", "unknown key"]);
+    let m = error(&format!(
+        "[[layer]]\n{COAT}coverage = {{ pattern = \"checker\", coords = \"world\" }}\n[[layer]]\n{GOLD}"
+    ));
+    assert_names(&m, &["`coverage.coords`", "\"uv\", \"screen\""]);
 }

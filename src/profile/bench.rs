@@ -76,6 +76,10 @@ pub struct DeviceInfo {
     pub driver: String,
     pub api_version: String,
     pub vendor_id: u32,
+    /// The lanes a SIMD unit runs in lockstep (Vulkan's subgroup size); absent in results
+    /// written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub subgroup_size: Option<u32>,
 }
 
 #[derive(Debug, Serialize, Deserialize)]
@@ -123,6 +127,57 @@ pub struct Run {
     /// the driver names them) where the device offers the extension, else `"unsupported"`
     /// (lavapipe); `null` in results written before the distinction.
     pub executable_stats: Option<serde_json::Value>,
+    /// The layers the model runs over per shaded pixel, where the draw's pixels are known
+    /// (the full-screen scene, or a stack that is the same everywhere): the CPU twin of the
+    /// shader's coverage test (`material::surface`). Absent for ggx runs, and in results
+    /// written before coverage.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub active_layers: Option<ActiveLayers>,
+}
+
+/// The spread of a run's active layer count over its shaded pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ActiveLayers {
+    pub min: u32,
+    pub mean: f64,
+    pub max: u32,
+}
+
+impl ActiveLayers {
+    /// Over the `width`×`height` frame of `scene`; `None` where the pixels' texture
+    /// coordinates are not known (a varying stack on the sphere).
+    pub fn of(stack: &Stack, scene: Scene, width: u32, height: u32) -> Option<Self> {
+        let n = stack.layers.len() as u32;
+        let Some(surface) = &stack.surface else {
+            return Some(Self {
+                min: n,
+                mean: f64::from(n),
+                max: n,
+            });
+        };
+        if scene != Scene::FullScreen {
+            return None;
+        }
+        let (mut min, mut max, mut sum) = (u32::MAX, 0, 0u64);
+        for y in 0..height {
+            for x in 0..width {
+                // The full-screen grid's texture coordinates are the frame's.
+                let uv = (
+                    (f64::from(x) + 0.5) / f64::from(width),
+                    (f64::from(y) + 0.5) / f64::from(height),
+                );
+                let count = surface.maps.layers_at(&stack.layers, uv, (x, y)).len() as u32;
+                min = min.min(count);
+                max = max.max(count);
+                sum += u64::from(count);
+            }
+        }
+        Some(Self {
+            min,
+            mean: sum as f64 / (f64::from(width) * f64::from(height)),
+            max,
+        })
+    }
 }
 
 #[derive(Debug, Serialize, Deserialize)]
@@ -210,9 +265,12 @@ pub fn run(
     let mut passes: Vec<ForwardPass> = Vec::new();
     let mut pass_of = Vec::with_capacity(cases.len());
     for (case, stack) in cases.iter().zip(&layers) {
-        let index = match passes.iter().position(|p| p.shades(case.variant, stack)) {
+        let surface = case.stack.surface.as_ref();
+        let shades = |p: &ForwardPass| p.shades(case.variant, stack, surface.is_some());
+        let index = match passes.iter().position(shades) {
             Some(i) => i,
             None => {
+                renderer.set_surface(surface)?;
                 passes.push(renderer.prepare(case.variant, stack)?);
                 passes.len() - 1
             }
@@ -226,6 +284,7 @@ pub fn run(
     for frame in 0..config.warmup + config.frames {
         for i in 0..cases.len() {
             let pass = &passes[pass_of[i]];
+            renderer.set_surface(cases[i].stack.surface.as_ref())?;
             let result = renderer.render(pass, &layers[i], config.width, config.height)?;
             if frame >= config.warmup {
                 times[i].push(result.shaded.duration.as_ms());
@@ -262,6 +321,7 @@ pub fn run(
             driver: format!("{} {}", report.driver_name, report.driver_info),
             api_version: report.api_version.clone(),
             vendor_id: report.vendor_id,
+            subgroup_size: Some(report.subgroup_size),
         },
         git_rev: git_rev(),
         command: std::env::args().collect::<Vec<_>>().join(" "),
@@ -295,6 +355,11 @@ pub fn run(
                 instructions_per_pixel: None,
                 instructions_per_pixel_ratio: None,
                 executable_stats: executable_stats[p].clone(),
+                active_layers: (case.variant.model != Model::Ggx)
+                    .then(|| {
+                        ActiveLayers::of(&case.stack, config.scene, config.width, config.height)
+                    })
+                    .flatten(),
             })
             .collect(),
     })

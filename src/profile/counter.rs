@@ -141,7 +141,12 @@ pub fn worker(
     let mut passes: Vec<ForwardPass> = Vec::new();
     for case in cases {
         let layers = case.stack.params();
-        if !passes.iter().any(|p| p.shades(case.variant, &layers)) {
+        let surface = case.stack.surface.as_ref();
+        if !passes
+            .iter()
+            .any(|p| p.shades(case.variant, &layers, surface.is_some()))
+        {
+            renderer.set_surface(surface)?;
             passes.push(renderer.prepare(case.variant, &layers)?);
         }
     }
@@ -150,10 +155,12 @@ pub fn worker(
         place_scene(&mut renderer, scene, width, height)?;
         for (i, case) in cases.iter().enumerate() {
             let layers = case.stack.params();
+            let surface = case.stack.surface.as_ref();
             let pass = passes
                 .iter()
-                .find(|p| p.shades(case.variant, &layers))
+                .find(|p| p.shades(case.variant, &layers, surface.is_some()))
                 .expect("prepared above");
+            renderer.set_surface(surface)?;
             // llvmpipe compiles a fragment-shader variant at its first draw: keep that out.
             renderer.render(pass, &layers, width, height)?;
             renderer.render_observed(pass, &layers, width, height, &mut |phase| match phase {

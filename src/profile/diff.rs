@@ -335,6 +335,7 @@ mod tests {
             instructions_per_pixel: jit.map(|n| n as f64 / 1000.0),
             instructions_per_pixel_ratio: None,
             executable_stats: None,
+            active_layers: None,
         }
     }
 
@@ -348,6 +349,7 @@ mod tests {
                     driver: "Mesa".into(),
                     api_version: "1.3".into(),
                     vendor_id: 0x10005,
+                    subgroup_size: None,
                 },
                 git_rev: name.into(),
                 command: String::new(),

@@ -974,6 +974,7 @@ fn reading(s: &StudyDir) -> Vec<String> {
     }
 
     lines.extend(dilution(r));
+    lines.extend(divergence(r));
     lines.extend(columns_reading(s));
 
     // lavapipe's draw-time rebuild: far more instructions outside the JIT code than the ggx
@@ -1121,6 +1122,103 @@ fn dilution(r: &Results) -> Option<String> {
             r.scene
         )
     })
+}
+
+/// The cost of a layer count that varies per pixel (the divergence study): the runs whose
+/// pixels all run the same count draw the coherent cost line (piecewise linear in the count);
+/// every run whose count varies is read against that line at its mean count — the excess is
+/// what divergence costs — and against the line at its busiest pixel's count, which a SIMD
+/// group holding that pixel runs whatever its other lanes need. Empty without at least two
+/// coherent counts and one varying run.
+fn divergence(r: &Results) -> Vec<String> {
+    let runs: Vec<(&Run, super::bench::ActiveLayers)> = r
+        .runs
+        .iter()
+        .filter_map(|run| Some((run, run.active_layers?)))
+        .collect();
+    let mut coherent: Vec<(f64, &Run)> = runs
+        .iter()
+        .filter(|(_, a)| a.min == a.max)
+        .map(|&(run, a)| (a.mean, run))
+        .collect();
+    coherent.sort_by(|a, b| a.0.total_cmp(&b.0));
+    coherent.dedup_by(|a, b| a.0 == b.0);
+    let varying: Vec<_> = runs.iter().filter(|(_, a)| a.min < a.max).collect();
+    if coherent.len() < 2 || varying.is_empty() {
+        return Vec::new();
+    }
+    // The coherent cost at `layers` by `cost`, interpolated between the coherent runs.
+    let line = |layers: f64, cost: &dyn Fn(&Run) -> Option<f64>| -> Option<f64> {
+        let i = coherent.windows(2).position(|w| layers <= w[1].0)?;
+        let ((x0, a), (x1, b)) = (coherent[i], coherent[i + 1]);
+        if layers < x0 {
+            return None;
+        }
+        let (y0, y1) = (cost(a)?, cost(b)?);
+        Some(y0 + (y1 - y0) * (layers - x0) / (x1 - x0))
+    };
+    let time = |run: &Run| Some(run.median_ms);
+    let jit = |run: &Run| run.instructions_per_pixel;
+    let per = |run: &Run, a: &super::bench::ActiveLayers, cost: &dyn Fn(&Run) -> Option<f64>| {
+        let at_mean = line(a.mean, cost)?;
+        let at_max = line(f64::from(a.max), cost)?;
+        let value = cost(run)?;
+        Some((
+            value / at_mean - 1.0,
+            (value - at_mean) / (at_max - at_mean),
+        ))
+    };
+    let pct = |x: f64| format!("{:+.0} %", 100.0 * x);
+    let mut lines = Vec::new();
+    for (run, a) in varying {
+        let mut parts = Vec::new();
+        if let Some((excess, share)) = per(run, a, &jit) {
+            parts.push(format!(
+                "JIT instructions per pixel {} ({:.0} % of the way to its busiest pixel's)",
+                pct(excess),
+                100.0 * share
+            ));
+        }
+        if let Some((excess, share)) = per(run, a, &time) {
+            parts.push(format!(
+                "time {} ({:.0} % of the way)",
+                pct(excess),
+                100.0 * share
+            ));
+        }
+        if parts.is_empty() {
+            continue;
+        }
+        lines.push(format!(
+            "{}: {} to {} layers per pixel, {:.2} on average; against coherent shading of \
+             {:.2} layers (interpolated between the runs whose pixels all run one count): {}.",
+            run.material,
+            a.min,
+            a.max,
+            a.mean,
+            a.mean,
+            parts.join("; ")
+        ));
+    }
+    if let Some(lanes) = r.device.subgroup_size {
+        let simd = if is_llvmpipe(r) {
+            format!(
+                "lavapipe runs {lanes} pixels in lockstep (its subgroup size: one SIMD vector \
+                 of 32-bit lanes, part of the 4x4 pixel block it rasterises)"
+            )
+        } else {
+            format!(
+                "{} runs {lanes} lanes in lockstep (its subgroup size)",
+                r.device.name
+            )
+        };
+        lines.push(format!(
+            "{simd}: a group in which any pixel runs more layers runs them for all its pixels, \
+             so a mask coherent over groups of that size costs what its mean costs, and a finer \
+             one what its busiest pixels cost."
+        ));
+    }
+    lines
 }
 
 /// For a study of several materials over one other axis: each column's ratio to ggx over
@@ -1308,6 +1406,7 @@ mod tests {
             instructions_per_pixel: None,
             instructions_per_pixel_ratio: None,
             executable_stats: None,
+            active_layers: None,
         }
     }
 
@@ -1332,6 +1431,7 @@ mod tests {
                     driver: "llvmpipe Mesa".into(),
                     api_version: "1.3".into(),
                     vendor_id: 0x10005,
+                    subgroup_size: None,
                 },
                 git_rev: "0".into(),
                 command: "c".into(),
@@ -1432,6 +1532,7 @@ mod tests {
                     driver: "llvmpipe Mesa".into(),
                     api_version: "1.3".into(),
                     vendor_id: 0x10005,
+                    subgroup_size: None,
                 },
                 git_rev: "0".into(),
                 command: "c".into(),
@@ -1533,6 +1634,7 @@ mod tests {
                     driver: "llvmpipe Mesa".into(),
                     api_version: "1.3".into(),
                     vendor_id: 0x10005,
+                    subgroup_size: None,
                 },
                 git_rev: "0".into(),
                 command: "c".into(),

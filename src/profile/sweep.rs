@@ -15,6 +15,7 @@
 //! counter = "instructions"            # optional: also count instructions under callgrind
 //! counter_sizes = ["48x48", "96x96"]  # the two counted resolutions (per pixel: the difference)
 //! fit = "linear"                      # optional: report a least-squares line along axis 1
+//! keep_size = true                    # optional: a suite's size and counter_sizes do not apply
 //! [[axis]]                            # cartesian product, first axis on the charts' x axis
 //! name = "max_layers"
 //! values = [2, 4, 8, 16]
@@ -73,6 +74,9 @@ pub struct SweepFile {
     pub warmup: Option<u32>,
     pub counter: Option<String>,
     pub counter_sizes: Option<Vec<String>>,
+    /// `true`: a suite's `size` and `counter_sizes` do not apply to this study, whose
+    /// materials are sized in pixels (masks in screen coordinates: the divergence study).
+    pub keep_size: Option<bool>,
     /// Replaced by `counter_sizes`; read only to say so.
     pub counter_size: Option<toml::Value>,
     pub fit: Option<String>,
@@ -167,6 +171,9 @@ pub struct Study {
     pub warmup: u32,
     /// The counted resolutions when instruction counting is on.
     pub counter: Option<CounterSizes>,
+    /// The resolutions the file (or its suite) names, used by `--counter instructions` when
+    /// the file does not count by itself.
+    pub counter_sizes: CounterSizes,
     pub axes: Vec<String>,
     pub points: Vec<Point>,
     /// Combinations left out because the stack does not fit the variant's `max_layers`.
@@ -183,7 +190,7 @@ impl Study {
     /// Counts instructions too (`--counter instructions`): at the study's own counter sizes
     /// when it counts already, else at [`CounterSizes::DEFAULT`].
     pub fn count_instructions(&mut self) {
-        self.counter.get_or_insert(CounterSizes::DEFAULT);
+        self.counter.get_or_insert(self.counter_sizes);
     }
 }
 
@@ -367,9 +374,11 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
             &format!("`{name}`: use letters, digits, `-` and `_` (it names a directory)"),
         ));
     }
+    let keep_size = sweep.keep_size == Some(true);
     let size_text = over
         .size
         .clone()
+        .filter(|_| !keep_size)
         .or_else(|| sweep.size.clone())
         .unwrap_or_else(|| "320x180".into());
     let Size { width, height } = parse_size(file, "size", &size_text)?;
@@ -402,14 +411,14 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
         ));
     }
     let warmup = over.warmup.or(sweep.warmup).unwrap_or(2);
+    let suite_sizes = over.counter_sizes.as_ref().filter(|_| !keep_size);
+    let counter_sizes = match suite_sizes.or(sweep.counter_sizes.as_ref()) {
+        Some(sizes) => parse_counter_sizes(file, sizes)?,
+        None => CounterSizes::DEFAULT,
+    };
     let counter = match over.counter.as_deref().or(sweep.counter.as_deref()) {
         None | Some("none") => None,
-        Some("instructions") => {
-            match over.counter_sizes.as_ref().or(sweep.counter_sizes.as_ref()) {
-                Some(sizes) => Some(parse_counter_sizes(file, sizes)?),
-                None => Some(CounterSizes::DEFAULT),
-            }
-        }
+        Some("instructions") => Some(counter_sizes),
         Some(other) => {
             return Err(bad(
                 file,
@@ -630,6 +639,7 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
         frames,
         warmup,
         counter,
+        counter_sizes,
         axes: axes.into_iter().map(|(n, _)| n).collect(),
         points,
         skipped,
@@ -1023,7 +1033,13 @@ pub fn charts_of(
     };
     let mut placed = Vec::new();
     for p in &meta.points {
-        let category = p.coords.first().cloned().unwrap_or_else(|| "base".into());
+        let mut category = p.coords.first().cloned().unwrap_or_else(|| "base".into());
+        // A material file on the x axis reads as its stem (`divergence/noise.toml` → noise).
+        if x_axis == "material" && category.ends_with(".toml") {
+            if let Some(stem) = Path::new(&category).file_stem() {
+                category = stem.to_string_lossy().into_owned();
+            }
+        }
         let mut label_parts: Vec<String> = meta
             .axes
             .iter()

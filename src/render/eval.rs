@@ -239,10 +239,10 @@ impl<'g> GpuEvaluator<'g> {
         }
         let device = &self.gpu.device;
         let stride = 2 + self.max_lobes(layers.len());
-        let material = material_buffer(device, layers, "eval material")?;
+        let material = material_buffer(device, layers, None, "eval material")?;
         let shading = self
             .inputs
-            .bind(self.variant, &material, None, "eval shading")?;
+            .bind(self.variant, &material, None, None, "eval shading")?;
         let results = Buffer::new(
             device,
             BufferDesc::readback((samples.len() * stride * 16) as u64),

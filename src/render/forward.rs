@@ -29,6 +29,8 @@ pub struct ForwardPass {
     pub spirv_bytes: usize,
     /// `None` under `mode=generic`.
     pub material: Option<PassMaterial>,
+    /// Built for a spatially varying stack (`ShadeSpec::surface_maps`).
+    pub surface: bool,
 }
 
 impl ForwardPass {
@@ -56,6 +58,7 @@ impl ForwardPass {
             attributes: &[
                 (0, Format::R32G32B32_SFLOAT, 0),
                 (1, Format::R32G32B32_SFLOAT, 12),
+                (2, Format::R32G32_SFLOAT, 24),
             ],
             color_format,
             cull_back: true,
@@ -66,12 +69,14 @@ impl ForwardPass {
             pipeline,
             spirv_bytes: fragment.len() * 4,
             material,
+            surface: spec.surface_maps != 0,
         })
     }
 
-    /// Whether this pass is `variant`'s and shades `layers`.
-    pub fn shades(&self, variant: VariantKey, layers: &[LayerParams]) -> bool {
-        self.variant == variant && self.check_material(layers).is_ok()
+    /// Whether this pass is `variant`'s and shades `layers`, varying over the surface or
+    /// not (`surface`).
+    pub fn shades(&self, variant: VariantKey, layers: &[LayerParams], surface: bool) -> bool {
+        self.variant == variant && self.surface == surface && self.check_material(layers).is_ok()
     }
 
     /// Whether this pass shades `layers` as its variant says: any stack that fits a generic

@@ -108,12 +108,13 @@ impl<'g> ShadingInputs<'g> {
 
     /// The shading set for `variant` and the stack in `material`, with a `mode=baked`
     /// material's lobe table (`baked`; other passes never read binding 5, which then holds
-    /// the split-sum table again).
+    /// the split-sum table again) and a spatially varying stack's maps (`layer_maps`).
     pub fn bind(
         &self,
         variant: VariantKey,
         material: &Buffer,
         baked: Option<&ImageView>,
+        layer_maps: Option<&ImageView>,
         name: &str,
     ) -> Result<DescriptorSet> {
         let fgd = self.fgd(variant)?;
@@ -126,6 +127,7 @@ impl<'g> ShadingInputs<'g> {
             fgd_volume: &fgd.volume_view,
             fgd_plane: &fgd.plane_view,
             baked: baked.unwrap_or(split_sum),
+            layer_maps,
         };
         Ok(self.layout.bind(&self.gpu.device, &views, name)?)
     }

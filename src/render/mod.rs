@@ -10,5 +10,6 @@ pub mod renderer;
 pub mod scene;
 pub mod sheet;
 pub mod sky;
+pub mod surface;
 
 pub use renderer::{RenderedFrame, Renderer, ShadedPhase, TargetFormat};

@@ -29,6 +29,9 @@ use super::inputs::ShadingInputs;
 use super::lights::Lighting;
 use super::scene::{uv_sphere, Camera, Mesh};
 use super::sky::SkyPass;
+use super::surface::SurfaceTexture;
+use crate::material::Surface;
+use std::sync::Arc;
 
 /// The render target's format: linear HDR RGBA.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -84,6 +87,10 @@ pub struct Renderer<'g> {
     pub camera: Camera,
     /// The environment's scale and the analytic lights (the environment alone by default).
     pub lighting: Lighting,
+    /// The maps of every spatially varying stack set so far ([`Renderer::set_surface`]), and
+    /// the one passes are prepared and frames rendered for (`None`: uniform stacks).
+    surfaces: Vec<SurfaceTexture>,
+    current_surface: Option<usize>,
 }
 
 impl<'g> Renderer<'g> {
@@ -144,6 +151,8 @@ impl<'g> Renderer<'g> {
             target,
             camera: Camera::default(),
             lighting: Lighting::default(),
+            surfaces: Vec::new(),
+            current_surface: None,
         })
     }
 
@@ -182,6 +191,28 @@ impl<'g> Renderer<'g> {
         Ok(())
     }
 
+    /// Sets the spatial variation of the stacks that later passes and frames shade: a
+    /// stack's [`crate::material::Stack::surface`] (its maps are uploaded once per surface),
+    /// or `None` for uniform stacks. A pass prepared for one kind renders only that kind.
+    pub fn set_surface(&mut self, surface: Option<&Arc<Surface>>) -> Result<()> {
+        self.current_surface = match surface {
+            None => None,
+            Some(s) => match self.surfaces.iter().position(|t| t.holds(s)) {
+                Some(i) => Some(i),
+                None => {
+                    self.surfaces.push(SurfaceTexture::upload(self.gpu, s)?);
+                    Some(self.surfaces.len() - 1)
+                }
+            },
+        };
+        Ok(())
+    }
+
+    /// The maps set by [`Renderer::set_surface`].
+    fn surface_texture(&self) -> Option<&SurfaceTexture> {
+        self.current_surface.map(|i| &self.surfaces[i])
+    }
+
     /// Compiles and builds the pipeline of `variant` (and the tables it samples) for the
     /// stack `layers` (top first): under `mode=generic` the pass shades any stack that fits;
     /// under the other modes it is built for this one (its structure, its values, or its baked
@@ -205,8 +236,15 @@ impl<'g> Renderer<'g> {
                  mode (use mode=generic)"
             )));
         }
+        if self.current_surface.is_some() && variant.mode.per_material() {
+            return Err(Error::Unsupported(format!(
+                "variant {variant}: this stack varies over the surface (textures, patterns or \
+                 coverage); it shades under mode=generic only, which reads its maps per pixel"
+            )));
+        }
         if !variant.mode.per_material() {
-            let spec = shade_spec(variant, layers, None).map_err(specialize)?;
+            let mut spec = shade_spec(variant, layers, None).map_err(specialize)?;
+            spec.surface_maps = u32::from(self.current_surface.is_some());
             let format = self.target.format();
             let pass = ForwardPass::new(self.gpu, &self.layout, format, variant, &spec, None)?;
             return Ok(pass);
@@ -258,6 +296,26 @@ impl<'g> Renderer<'g> {
         observe: &mut dyn FnMut(ShadedPhase),
     ) -> Result<RenderedFrame> {
         pass.check_material(layers)?;
+        match (self.surface_texture(), pass.surface) {
+            (Some(s), true) if s.surface.layers.len() == layers.len() => {}
+            (None, false) => {}
+            (Some(s), true) => {
+                return Err(Error::Unsupported(format!(
+                    "the surface's maps are for {} layers; this stack has {}",
+                    s.surface.layers.len(),
+                    layers.len()
+                )))
+            }
+            (_, built_for_maps) => {
+                let kind = |maps: bool| if maps { "a varying" } else { "a uniform" };
+                return Err(Error::Unsupported(format!(
+                    "this pass was prepared for {} stack and the renderer holds {}; set the \
+                     surface before preparing",
+                    kind(built_for_maps),
+                    kind(self.current_surface.is_some())
+                )));
+            }
+        }
         let device = &self.gpu.device;
         let view_proj = self.camera.view_proj(width as f32 / height as f32);
         let constants = FrameConstants {
@@ -283,15 +341,20 @@ impl<'g> Renderer<'g> {
             &lights_block(&self.lighting.lights),
             "lights",
         )?;
-        let material = material_buffer(device, layers, "material")?;
+        let maps = self.surface_texture().map(|t| &t.surface.maps);
+        let material = material_buffer(device, layers, maps, "material")?;
         let baked = pass
             .material
             .as_ref()
             .and_then(|m| m.baked.as_ref())
             .map(|(_, texture)| &texture.view);
-        let shading = self
-            .inputs
-            .bind(pass.variant, &material, baked, "shading")?;
+        let shading = self.inputs.bind(
+            pass.variant,
+            &material,
+            baked,
+            self.surface_texture().map(|t| &t.view),
+            "shading",
+        )?;
         let mut scene = DescriptorSet::new(device, &self.scene_layout, "scene")?;
         scene
             .write(0, Resource::Buffer(&uniforms))

@@ -45,12 +45,14 @@ impl Camera {
     }
 }
 
-/// Interleaved position + normal, 24 bytes.
+/// Interleaved position, normal and texture coordinates, 32 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Vertex {
     pub position: [f32; 3],
     pub normal: [f32; 3],
+    /// Texture coordinates: one unit square over the mesh (the surface maps repeat).
+    pub uv: [f32; 2],
 }
 
 pub struct Mesh {
@@ -70,9 +72,13 @@ pub fn uv_sphere(stacks: u32, slices: u32) -> Mesh {
                 theta.cos(),
                 theta.sin() * phi.cos(),
             ];
+            // u around the pole axis, from 0.5 at φ = 0 (+z, facing the default camera) so
+            // that the seam of a texture that does not tile is at the back; v from the north
+            // pole down.
             vertices.push(Vertex {
                 position: p,
                 normal: p,
+                uv: [0.5 + j as f32 / slices as f32, i as f32 / stacks as f32],
             });
         }
     }
@@ -213,9 +219,12 @@ pub fn full_screen(camera: &Camera, width: u32, height: u32) -> Mesh {
             let b = v.cross(a);
             let d = concentric_disk(x, -y);
             let normal = (1.0 - d.length_squared()).max(0.0).sqrt() * v + d.x * a + d.y * b;
+            // Texture coordinates are the frame's: (0, 0) at the top left, (1, 1) at the
+            // bottom right, linear in pixels (the rectangle faces the camera).
             vertices.push(Vertex {
                 position: position.to_array(),
                 normal: normal.normalize().to_array(),
+                uv: [0.5 * (x + 1.0), 0.5 * (y + 1.0)],
             });
         }
     }
@@ -341,6 +350,7 @@ pub fn torus(major: f32, minor: f32, rings: u32, sides: u32) -> Mesh {
             vertices.push(Vertex {
                 position: [r * su, minor * sv, r * cu],
                 normal,
+                uv: [i as f32 / rings as f32, j as f32 / sides as f32],
             });
         }
     }
@@ -493,6 +503,7 @@ mod tests {
         let corner = |x: f32, y: f32| Vertex {
             position: [x, y, 0.5],
             normal: [0.0, 0.0, 1.0],
+            uv: [0.0; 2],
         };
         let mut mesh = Mesh {
             vertices: vec![

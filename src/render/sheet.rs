@@ -2,10 +2,12 @@
 //! columns = variants), each tile labelled with its material and variant, for documentation
 //! and for eyeballing a change.
 
+use std::sync::Arc;
+
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::imageio::{check_exposure, tonemap, HdrImage};
-use crate::material::{base_variant, presets, Stack};
+use crate::material::{base_variant, presets, Stack, Surface};
 use crate::model::LayerParams;
 use crate::tables::environment::EnvDesc;
 use crate::text::TextFont;
@@ -18,6 +20,8 @@ use super::renderer::Renderer;
 pub struct SheetRow {
     pub name: String,
     pub layers: Vec<LayerParams>,
+    /// A spatially varying stack's maps ([`Stack::surface`]).
+    pub surface: Option<Arc<Surface>>,
 }
 
 /// Gap between tiles, in pixels.
@@ -35,6 +39,7 @@ pub fn preset_rows() -> Result<Vec<SheetRow>> {
             Ok(SheetRow {
                 name: stack.name,
                 layers: stack.layers,
+                surface: stack.surface,
             })
         })
         .collect()
@@ -139,8 +144,18 @@ pub fn render(
     let font = TextFont::bundled();
     for (r, row) in rows.iter().enumerate() {
         for (c, pass) in passes.iter_mut().enumerate() {
-            if pass.check_material(&row.layers).is_err() && pass.material.is_some() {
-                *pass = renderer.prepare(columns[c].variant, &row.layers)?;
+            let (x0, y0) = (GAP + c * (t + GAP), GAP + r * (t + GAP));
+            let variant = columns[c].variant;
+            let varies = row.surface.is_some();
+            renderer.set_surface(row.surface.as_ref())?;
+            if varies && variant.mode.per_material() {
+                // A varying stack shades under mode=generic only: the tile says so.
+                let label = format!("{} · {}: varies, generic only", row.name, columns[c].label);
+                label_tile(&font, &mut sheet, width, (x0, y0), t, &label);
+                continue;
+            }
+            if !pass.shades(variant, &row.layers, varies) {
+                *pass = renderer.prepare(variant, &row.layers)?;
             }
             let frame = renderer.render(pass, &row.layers, tile, tile)?;
             if frame.pixels.iter().flatten().any(|v| !v.is_finite()) {
@@ -150,7 +165,6 @@ pub fn render(
                 )));
             }
             let rgba = tonemap(&frame.pixels, exposure_ev);
-            let (x0, y0) = (GAP + c * (t + GAP), GAP + r * (t + GAP));
             for y in 0..t {
                 let dst = ((y0 + y) * width + x0) * 4;
                 sheet[dst..dst + t * 4].copy_from_slice(&rgba[y * t * 4..(y + 1) * t * 4]);

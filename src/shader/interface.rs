@@ -6,10 +6,12 @@
 use std::mem::{offset_of, size_of};
 use std::sync::Arc;
 
+use crate::material::surface::SurfaceMaps;
 use crate::model::LayerParams;
 use crate::vk::{
-    BindingKind, Buffer, BufferUsageFlags, DescriptorSet, DescriptorSetLayout, Device, ImageView,
-    Resource, Sampler, SamplerDesc, Stages, VkResult,
+    upload_image, BindingKind, Buffer, BufferUsageFlags, DescriptorSet, DescriptorSetLayout,
+    Device, Format, Image, ImageDesc, ImageState, ImageView, Resource, Sampler, SamplerDesc,
+    Stages, VkResult,
 };
 
 use crate::variant::MAX_LAYERS_LIMIT;
@@ -49,12 +51,16 @@ pub struct MaterialGpu {
     /// x: layer count.
     pub info: [u32; 4],
     pub layers: [LayerGpu; MAX_LAYERS_LIMIT as usize],
+    /// Per layer, the maps of its varying fields ([`SurfaceMaps`]'s codes: x: η, κ, σs, σa;
+    /// y: α, depth, g, coverage, a byte each); zeros for a uniform stack.
+    pub maps: [[u32; 4]; MAX_LAYERS_LIMIT as usize],
 }
 
 const _: () = assert!(size_of::<LayerGpu>() == 80);
 const _: () = assert!(offset_of!(LayerGpu, params) == 64);
-const _: () = assert!(size_of::<MaterialGpu>() == 16 + 80 * MAX_LAYERS_LIMIT as usize);
+const _: () = assert!(size_of::<MaterialGpu>() == 16 + 96 * MAX_LAYERS_LIMIT as usize);
 const _: () = assert!(offset_of!(MaterialGpu, layers) == 16);
+const _: () = assert!(offset_of!(MaterialGpu, maps) == 16 + 80 * MAX_LAYERS_LIMIT as usize);
 
 impl MaterialGpu {
     /// Packs `layers` (top first); at most [`MAX_LAYERS_LIMIT`] layers, which the material
@@ -68,6 +74,7 @@ impl MaterialGpu {
         let mut gpu = Self {
             info: [layers.len() as u32, 0, 0, 0],
             layers: [LayerGpu::default(); MAX_LAYERS_LIMIT as usize],
+            maps: [[0; 4]; MAX_LAYERS_LIMIT as usize],
         };
         for (dst, src) in gpu.layers.iter_mut().zip(layers) {
             *dst = LayerGpu {
@@ -79,6 +86,14 @@ impl MaterialGpu {
             };
         }
         gpu
+    }
+
+    /// With the map codes of a spatially varying stack (one per layer, top first).
+    pub fn with_maps(mut self, maps: &SurfaceMaps) -> Self {
+        for (dst, code) in self.maps.iter_mut().zip(&maps.codes) {
+            *dst = [code[0], code[1], 0, 0];
+        }
+        self
     }
 }
 
@@ -110,8 +125,10 @@ pub const FGD_GRID_SIZE: u32 = 64;
 /// benchmarks' back and took minutes of LLVM time for some variants. Storage-buffer loads are
 /// never inlined. Binding 5 holds a `mode=baked` material's lobe table (`render::baked`; a
 /// placeholder for every other pass). Binding 6 holds the white GGX lobe's directional albedo
-/// that the analytic lights normalise each lobe by (`model::light`).
-pub const SHADING_BINDINGS: [Binding; 7] = [
+/// that the analytic lights normalise each lobe by (`model::light`). Binding 7 holds the maps of
+/// a spatially varying stack (`material::surface`), a 2-D array sampled with repeat; a 1×1
+/// placeholder for uniform stacks.
+pub const SHADING_BINDINGS: [Binding; 8] = [
     Binding {
         binding: 0,
         kind: BindingKind::StorageBuffer,
@@ -147,6 +164,11 @@ pub const SHADING_BINDINGS: [Binding; 7] = [
         kind: BindingKind::SampledImage,
         name: "lobe_albedo",
     },
+    Binding {
+        binding: 7,
+        kind: BindingKind::SampledImage,
+        name: "layer_maps",
+    },
 ];
 
 /// The views and buffer one shading set binds.
@@ -160,6 +182,8 @@ pub struct InputViews<'a> {
     pub baked: &'a ImageView,
     /// The white GGX lobe's albedo E(μ, √α) (`tables::lobe_albedo`).
     pub lobe_albedo: &'a ImageView,
+    /// A spatially varying stack's maps; the layout's placeholder when `None`.
+    pub layer_maps: Option<&'a ImageView>,
 }
 
 /// The shading set's layout (what a pipeline that shades lists as set 0) and the sampler its
@@ -167,14 +191,27 @@ pub struct InputViews<'a> {
 pub struct ShadingLayout {
     pub set_layout: DescriptorSetLayout,
     sampler: Sampler,
+    /// The surface maps' sampler: bilinear, repeating.
+    repeat: Sampler,
+    /// One zero texel bound as `layer_maps` for uniform stacks.
+    no_maps: (Image, ImageView),
 }
 
 impl ShadingLayout {
     pub fn new(device: &Arc<Device>) -> VkResult<Self> {
         let kinds = SHADING_BINDINGS.map(|b| b.kind);
+        let image = Image::new(
+            device,
+            ImageDesc::new_2d_array(Format::R32G32B32A32_SFLOAT, 1, 1, 1),
+            "no layer maps",
+        )?;
+        upload_image(device, &image, &[0; 16], ImageState::FragmentRead)?;
+        let view = image.view("no layer maps")?;
         Ok(Self {
             set_layout: DescriptorSetLayout::new(device, &kinds, Stages::All, "shading inputs")?,
             sampler: Sampler::new(device, SamplerDesc::linear_clamp(), "shading tables")?,
+            repeat: Sampler::new(device, SamplerDesc::linear_repeat(), "layer maps")?,
+            no_maps: (image, view),
         })
     }
 
@@ -193,23 +230,28 @@ impl ShadingLayout {
             .write(3, sampled(views.fgd_volume))
             .write(4, sampled(views.fgd_plane))
             .write(5, sampled(views.baked))
-            .write(6, sampled(views.lobe_albedo));
+            .write(6, sampled(views.lobe_albedo))
+            .write(
+                7,
+                Resource::Sampled(views.layer_maps.unwrap_or(&self.no_maps.1), &self.repeat),
+            );
         Ok(set)
     }
 }
 
-/// A layer stack in the storage buffer the shading set binds.
+/// A layer stack, with its maps' codes if it varies, in the storage buffer the shading set
+/// binds.
 pub fn material_buffer(
     device: &Arc<Device>,
     layers: &[LayerParams],
+    maps: Option<&SurfaceMaps>,
     name: &str,
 ) -> VkResult<Buffer> {
-    Buffer::with_data(
-        device,
-        BufferUsageFlags::STORAGE_BUFFER,
-        &[MaterialGpu::new(layers)],
-        name,
-    )
+    let mut material = MaterialGpu::new(layers);
+    if let Some(maps) = maps {
+        material = material.with_maps(maps);
+    }
+    Buffer::with_data(device, BufferUsageFlags::STORAGE_BUFFER, &[material], name)
 }
 
 /// The descriptor set index of the scene's own inputs (the forward and sky passes).

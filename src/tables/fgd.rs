@@ -765,7 +765,7 @@ impl<'g> FgdProbe<'g> {
             gpu,
             layout,
             kernel,
-            material: material_buffer(&gpu.device, &[], "fgd probe material")?,
+            material: material_buffer(&gpu.device, &[], None, "fgd probe material")?,
             tir_unused: TirTable::for_variant(gpu, crate::variant::Tir::None)?,
         })
     }
@@ -801,6 +801,7 @@ impl<'g> FgdProbe<'g> {
             baked: &split_sum.view,
             // The probe lights nothing: any 2-D view fills the lights' binding.
             lobe_albedo: &split_sum.view,
+            layer_maps: None,
         };
         let shading = self.layout.bind(device, &views, "fgd probe shading")?;
         let mut set = DescriptorSet::new(device, &self.kernel.set_layout, "fgd probe")?;

@@ -289,6 +289,7 @@ impl App<'_> {
             let (width, height) = self.panels.viewport_pixels();
             let request = Request {
                 layers: self.panels.stack.params(),
+                surface: self.panels.stack.surface.clone(),
                 variant: self.panels.variant_for_scene(),
                 camera: self.panels.camera(),
                 lighting: self.panels.lighting.clone(),

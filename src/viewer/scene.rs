@@ -29,6 +29,8 @@ const VIEWER_ENV: EnvDesc = EnvDesc {
 /// One frame to render.
 pub struct Request {
     pub layers: Vec<LayerParams>,
+    /// A spatially varying stack's maps.
+    pub surface: Option<std::sync::Arc<crate::material::Surface>>,
     pub variant: VariantKey,
     pub camera: Camera,
     pub lighting: crate::render::lights::Lighting,
@@ -123,9 +125,11 @@ fn step(
     }
     // A per-material pass is rebuilt when the edit changes what it was built for: the
     // structure under `specialized`, any value under `specialized-values` and `baked`.
+    renderer.set_surface(request.surface.as_ref())?;
     let compiled = match pass.as_ref() {
         Some(p) => {
             p.variant != request.variant
+                || p.surface != request.surface.is_some()
                 || (p.material.is_some() && p.check_material(&request.layers).is_err())
         }
         None => true,

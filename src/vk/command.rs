@@ -308,6 +308,7 @@ impl Recorder<'_> {
     /// Copies a tightly packed buffer into mip 0, all layers, of `image` (in `TransferDst`).
     pub fn copy_buffer_to_image(&mut self, buffer: &Buffer, image: &Image) {
         let d = &image.desc;
+        let (width, height, depth) = d.mip_extent(0);
         let region = vk::BufferImageCopy::default()
             .image_subresource(vk::ImageSubresourceLayers {
                 aspect_mask: d.aspect(),
@@ -316,9 +317,9 @@ impl Recorder<'_> {
                 layer_count: d.layers(),
             })
             .image_extent(vk::Extent3D {
-                width: d.width,
-                height: d.height,
-                depth: d.depth,
+                width,
+                height,
+                depth,
             });
         // SAFETY: recording state; the buffer holds the whole mip (callers size it so).
         unsafe {

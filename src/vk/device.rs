@@ -55,6 +55,9 @@ pub struct DeviceReport {
     pub device_type: String,
     pub api_version: String,
     pub shader_float16: bool,
+    /// Lanes that execute in lockstep (`VkPhysicalDeviceSubgroupProperties`): llvmpipe's SIMD
+    /// vector width in 32-bit lanes, a GPU's warp or wave.
+    pub subgroup_size: u32,
     pub timestamps: bool,
     pub timestamp_period_ns: f32,
     pub timestamp_valid_bits: u32,
@@ -104,7 +107,10 @@ fn has_extension(instance: &ash::Instance, pd: vk::PhysicalDevice, name: &CStr) 
 
 fn report(instance: &ash::Instance, index: usize, pd: vk::PhysicalDevice) -> DeviceReport {
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
-    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+    let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+    let mut props2 = vk::PhysicalDeviceProperties2::default()
+        .push_next(&mut driver)
+        .push_next(&mut subgroup);
     // SAFETY: `pd` was enumerated from `instance`; the chain borrows locals.
     unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
     let props = props2.properties;
@@ -145,6 +151,7 @@ fn report(instance: &ash::Instance, index: usize, pd: vk::PhysicalDevice) -> Dev
         max_image_dimension_3d: props.limits.max_image_dimension3_d,
         max_image_dimension_cube: props.limits.max_image_dimension_cube,
         sub_texel_precision_bits: props.limits.sub_texel_precision_bits,
+        subgroup_size: subgroup.subgroup_size,
     }
 }
 

@@ -17,6 +17,8 @@ pub enum ImageKind {
     /// Six array layers, cube-compatible.
     Cube,
     D3,
+    /// `depth` array layers of 2-D images.
+    D2Array,
 }
 
 /// How an image is created; doubles as a pool key.
@@ -59,6 +61,15 @@ impl ImageDesc {
         }
     }
 
+    /// `layers` 2-D images of one size, sampled as a `sampler2DArray`.
+    pub fn new_2d_array(format: vk::Format, width: u32, height: u32, layers: u32) -> Self {
+        Self {
+            kind: ImageKind::D2Array,
+            depth: layers,
+            ..Self::new_2d(format, width, height)
+        }
+    }
+
     /// A colour attachment that is then copied out.
     pub fn render_target(format: vk::Format, width: u32, height: u32) -> Self {
         Self::new_2d(format, width, height).usage(
@@ -87,6 +98,7 @@ impl ImageDesc {
     pub fn layers(&self) -> u32 {
         match self.kind {
             ImageKind::Cube => 6,
+            ImageKind::D2Array => self.depth,
             _ => 1,
         }
     }
@@ -122,7 +134,10 @@ impl ImageDesc {
         (
             (self.width >> mip).max(1),
             (self.height >> mip).max(1),
-            (self.depth >> mip).max(1),
+            match self.kind {
+                ImageKind::D2Array => 1,
+                _ => (self.depth >> mip).max(1),
+            },
         )
     }
 }
@@ -143,7 +158,9 @@ impl Image {
                 vk::ImageCreateFlags::CUBE_COMPATIBLE,
             ),
             ImageKind::D3 => (vk::ImageType::TYPE_3D, vk::ImageCreateFlags::empty()),
+            ImageKind::D2Array => (vk::ImageType::TYPE_2D, vk::ImageCreateFlags::empty()),
         };
+        let (_, _, extent_depth) = desc.mip_extent(0);
         let info = vk::ImageCreateInfo::default()
             .flags(flags)
             .image_type(image_type)
@@ -151,7 +168,7 @@ impl Image {
             .extent(vk::Extent3D {
                 width: desc.width,
                 height: desc.height,
-                depth: desc.depth,
+                depth: extent_depth,
             })
             .mip_levels(desc.mip_levels)
             .array_layers(desc.layers())
@@ -196,6 +213,7 @@ impl Image {
             ImageKind::D2 => vk::ImageViewType::TYPE_2D,
             ImageKind::Cube => vk::ImageViewType::CUBE,
             ImageKind::D3 => vk::ImageViewType::TYPE_3D,
+            ImageKind::D2Array => vk::ImageViewType::TYPE_2D_ARRAY,
         };
         ImageView::new(self, view_type, self.desc.full_range(), name)
     }
@@ -204,7 +222,7 @@ impl Image {
     pub fn mip_view(&self, mip: u32, name: &str) -> VkResult<ImageView> {
         let view_type = match self.desc.kind {
             ImageKind::D2 => vk::ImageViewType::TYPE_2D,
-            ImageKind::Cube => vk::ImageViewType::TYPE_2D_ARRAY,
+            ImageKind::Cube | ImageKind::D2Array => vk::ImageViewType::TYPE_2D_ARRAY,
             ImageKind::D3 => vk::ImageViewType::TYPE_3D,
         };
         ImageView::new(self, view_type, self.desc.mip_range(mip), name)
@@ -280,6 +298,15 @@ impl SamplerDesc {
             mipmap: vk::SamplerMipmapMode::LINEAR,
             address_u: vk::SamplerAddressMode::CLAMP_TO_EDGE,
             address_v: vk::SamplerAddressMode::CLAMP_TO_EDGE,
+        }
+    }
+
+    /// Bilinear, repeating in u and v, one level: the surface maps.
+    pub fn linear_repeat() -> Self {
+        Self {
+            address_u: vk::SamplerAddressMode::REPEAT,
+            address_v: vk::SamplerAddressMode::REPEAT,
+            ..Self::linear_clamp()
         }
     }
 

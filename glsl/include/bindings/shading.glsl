@@ -20,5 +20,8 @@ layout(set = 0, binding = 5) uniform sampler2D baked_lobes;
 // The directional albedo E of a white GGX lobe at (μ, √α) (vertex-centred texels), with the variant's G2 (f32,
 // src/tables/lobe_albedo.rs): what the analytic lights normalise each lobe by (lib/light.glsl).
 layout(set = 0, binding = 6) uniform sampler2D lobe_albedo;
+// A spatially varying stack's maps (src/material/surface.rs), one slice per varying field,
+// sampled bilinearly with repeat; a 1×1 placeholder for uniform stacks.
+layout(set = 0, binding = 7) uniform sampler2DArray layer_maps;
 
 #endif

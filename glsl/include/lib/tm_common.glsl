@@ -115,7 +115,85 @@ bool tm_is_conductor(LayerGpu layer) {
 // ([[unroll]] in the models) every branch below folds and the dead paths vanish, and
 // MODE_SPECIALIZED_VALUES has the numbers too. The host decides the structure with the f64
 // model's own tests (src/specialize.rs), so both agree with the CPU oracle.
+#ifdef TM_SURFACE_MAPS
+// A spatially varying stack (SURFACE_MAPS; src/material/surface.rs, whose SurfaceMaps::layers_at
+// is the CPU twin): an entry point that has texture coordinates defines TM_SURFACE_MAPS and
+// calls tm_surface_begin per pixel, which keeps the layers whose coverage holds them there, in
+// order; the models then run over those only, so an uncovered layer costs no iteration and
+// the pixel is the stack without it. Every other field a map varies is read where the model
+// asks for the layer.
+vec2 tm_surface_uv;
+ivec2 tm_surface_pixel;
+uint tm_surface_count;
+uint tm_surface_slots[MAX_LAYERS];
+
+const uint TM_SCREEN_BIT = 0x80u;
+
+// The texel of map `code` holding the point: the pixel's in screen coordinates, else the
+// nearest to its texture coordinates (repeated).
+ivec3 tm_map_texel(uint code) {
+    ivec2 n = textureSize(layer_maps, 0).xy;
+    ivec2 texel = (code & TM_SCREEN_BIT) != 0u ? tm_surface_pixel
+                                               : ivec2(floor(tm_surface_uv * vec2(n)));
+    return ivec3(((texel % n) + n) % n, int((code & 0x7fu) - 1u));
+}
+
+// The value of map `code` at the point: bilinear over texture coordinates, or the pixel's.
+vec4 tm_map(uint code) {
+    if ((code & TM_SCREEN_BIT) != 0u) {
+        return texelFetch(layer_maps, tm_map_texel(code), 0);
+    }
+    return textureLod(layer_maps, vec3(tm_surface_uv, float((code & 0x7fu) - 1u)), 0.0);
+}
+
+void tm_surface_begin(vec2 uv, vec2 frag_coord) {
+    tm_surface_uv = uv;
+    tm_surface_pixel = ivec2(frag_coord);
+    tm_surface_slots[0] = 0u;
+    uint count = min(material.info.x, MAX_LAYERS);
+    uint n = 0u;
+    for (uint i = 0u; i < count; ++i) {
+        uint coverage = material.maps[i].y >> 24;
+        if (coverage == 0u || texelFetch(layer_maps, tm_map_texel(coverage), 0).r > 0.5) {
+            tm_surface_slots[n] = i;
+            ++n;
+        }
+    }
+    tm_surface_count = n;
+}
+
+// Layer `index` of the material with its varying fields read at the point.
+LayerGpu tm_surface_layer(uint index) {
+    LayerGpu layer = material.layers[index];
+    uvec2 codes = material.maps[index].xy;
+    if (codes.x != 0u) {
+        uint c = codes.x & 0xffu;
+        if (c != 0u) layer.ior.rgb = tm_map(c).rgb;
+        c = (codes.x >> 8) & 0xffu;
+        if (c != 0u) layer.kappa.rgb = tm_map(c).rgb;
+        c = (codes.x >> 16) & 0xffu;
+        if (c != 0u) layer.sigma_s.rgb = tm_map(c).rgb;
+        c = codes.x >> 24;
+        if (c != 0u) layer.sigma_a.rgb = tm_map(c).rgb;
+    }
+    if ((codes.y & 0xffffffu) != 0u) {
+        uint c = codes.y & 0xffu;
+        if (c != 0u) layer.params.x = tm_map(c).r;
+        c = (codes.y >> 8) & 0xffu;
+        if (c != 0u) layer.params.y = tm_map(c).r;
+        c = (codes.y >> 16) & 0xffu;
+        if (c != 0u) layer.params.z = tm_map(c).r;
+    }
+    return layer;
+}
+#endif
+
 uint tm_layer_count() {
+#ifdef TM_SURFACE_MAPS
+    if (SURFACE_MAPS != 0u) {
+        return tm_surface_count;
+    }
+#endif
     return SPECIALIZED ? LAYER_COUNT : min(material.info.x, MAX_LAYERS);
 }
 
@@ -124,6 +202,11 @@ LayerGpu tm_layer(uint i) {
     if (MODE == MODE_SPECIALIZED_VALUES) {
         return tm_layer_values(i);
     }
+#ifdef TM_SURFACE_MAPS
+    if (SURFACE_MAPS != 0u) {
+        return tm_surface_layer(tm_surface_slots[i]);
+    }
+#endif
     return material.layers[i];
 }
 

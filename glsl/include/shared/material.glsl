@@ -16,6 +16,10 @@ struct LayerGpu {
 struct MaterialGpu {
     uvec4 info;    // x: layer count
     LayerGpu layers[LAMINA_MAX_LAYERS_LIMIT];
+    // Per layer, the maps of a spatially varying stack (src/material/surface.rs): a byte per
+    // field, 0 (constant) or 1 + the slice of `layer_maps`, bit 7 set for screen coordinates.
+    // x: η, κ, σs, σa; y: α, depth, g, coverage (low byte first). Zeros for a uniform stack.
+    uvec4 maps[LAMINA_MAX_LAYERS_LIMIT];
 };
 
 #endif
