@@ -38,24 +38,49 @@ vec3 lobe_radiance(vec3 n, vec3 r, float alpha) {
     return textureLod(prefiltered, dir, ibl_mip_of_alpha(alpha, frame.params.x)).rgb;
 }
 
+// Light j at the point: its direction `l` and the irradiance it brings normal to it.
+vec3 light_at(uint j, out vec3 l) {
+    LightGpu light = lights[j];
+    l = light.position.xyz;
+    vec3 irradiance = light.radiance.rgb;
+    if (light.position.w != 0.0) {
+        vec3 to_light = light.position.xyz - shade_p;
+        float d2 = max(dot(to_light, to_light), 1e-8);
+        l = to_light * inversesqrt(d2);
+        irradiance /= d2;
+    }
+    return irradiance;
+}
+
 // What the analytic lights send back through a lobe of unit weight and roughness α.
 vec3 lobe_lights(float alpha, bool retro) {
     vec3 sum = vec3(0.0);
     uint count = light_info.x;
     for (uint j = 0u; j < count; ++j) {
-        LightGpu light = lights[j];
-        vec3 l = light.position.xyz;
-        vec3 irradiance = light.radiance.rgb;
-        if (light.position.w != 0.0) {
-            vec3 to_light = light.position.xyz - shade_p;
-            float d2 = max(dot(to_light, to_light), 1e-8);
-            l = to_light * inversesqrt(d2);
-            irradiance /= d2;
-        }
-        float a = light_alpha(alpha, light.radiance.w);
+        vec3 l;
+        vec3 irradiance = light_at(j, l);
+        float a = light_alpha(alpha, lights[j].radiance.w);
         sum += irradiance * light_lobe(shade_n, shade_v, shade_n_dot_v, l, a, retro);
     }
     return sum;
+}
+
+// What a Lambertian lobe of unit weight sends back (src/model/diffuse.rs): the irradiance at
+// the point over π — the lights' E·max(n·l, 0), and the environment's, cosine-convolved
+// (its order-2 spherical harmonics, tables::environment::irradiance_sh).
+vec3 diffuse_light() {
+    vec3 sum = vec3(0.0);
+    uint count = light_info.x;
+    for (uint j = 0u; j < count; ++j) {
+        vec3 l;
+        vec3 irradiance = light_at(j, l);
+        sum += irradiance * max(dot(shade_n, l), 0.0);
+    }
+    float scale = frame.params.y;
+    if (scale > 0.0) {
+        sum += scale * ibl_irradiance(shade_n, frame.irradiance);
+    }
+    return sum * INV_PI;
 }
 
 // A lobe's radiance: the environment's, scaled, and the lights'.
@@ -86,6 +111,10 @@ vec3 shade_ggx(vec3 n, vec3 v, float n_dot_v) {
 }
 
 void tm_emit_lobe(vec3 weight, float alpha, uint kind) {
+    if (kind == LOBE_DIFFUSE) {
+        shade_sum += weight * diffuse_light();
+        return;
+    }
     bool retro = kind == LOBE_RETRO;
     vec3 around = retro ? shade_v : reflect(-shade_v, shade_n);
     shade_sum += weight * lobe_light(around, alpha, retro);

@@ -40,13 +40,18 @@ vec3 eval_light;
 void tm_emit_lobe(vec3 weight, float alpha, uint kind) {
     if (eval_lobes < TM_MAX_LOBES) {
         vec3 value = weight;
-        if (push.lit != 0u) {
+        if (push.lit != 0u && kind == LOBE_DIFFUSE) {
+            // Lambertian: E·max(n·l, 0)/π, which integrates to 1 over the light directions.
+            value *= max(eval_light.z, 0.0) * INV_PI;
+        } else if (push.lit != 0u) {
             vec3 v = vec3(sqrt(max(1.0 - eval_mu * eval_mu, 0.0)), 0.0, eval_mu);
             float a = light_alpha(alpha, push.angular_radius);
             value *= light_lobe(vec3(0.0, 0.0, 1.0), v, eval_mu, eval_light, a,
                                 kind == LOBE_RETRO);
         }
-        results.values[eval_first_lobe + eval_lobes] = vec4(value, alpha);
+        // A diffuse lobe reads back with α = −1 (render/eval.rs).
+        results.values[eval_first_lobe + eval_lobes] =
+            vec4(value, kind == LOBE_DIFFUSE ? -1.0 : alpha);
     }
     if (kind == LOBE_RETRO && eval_lobes < 32u) {
         eval_retro |= 1u << eval_lobes;

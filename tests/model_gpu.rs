@@ -60,6 +60,7 @@ fn dielectric_stacks_conserve_energy_on_the_gpu() {
         sigma_s: [0.0; 3],
         sigma_a: [0.0; 3],
         g: 0.0,
+        diffuse: None,
     };
     let stacks = [
         vec![coat(1.5, 0.1)],
@@ -96,6 +97,7 @@ fn furnace_shows_no_energy_gain_for_lossless_stacks() {
         sigma_s: [0.0; 3],
         sigma_a: [0.0; 3],
         g: 0.0,
+        diffuse: None,
     };
     for model in ["model=tm2", "model=tm6"] {
         let bins = furnace::gpu(&gpu, model.parse().unwrap(), &[coat], 128, 12).unwrap();

@@ -52,6 +52,7 @@ fn sensible_stack(rng: &mut Rng, model: Model) -> Vec<LayerParams> {
                     [0.0; 3]
                 },
                 g: if medium { rng.range(-0.5, 0.9) } else { 0.0 },
+                diffuse: None,
             }
         })
         .collect();
@@ -65,6 +66,7 @@ fn sensible_stack(rng: &mut Rng, model: Model) -> Vec<LayerParams> {
             sigma_s: [0.0; 3],
             sigma_a: [0.0; 3],
             g: 0.0,
+            diffuse: None,
         });
     }
     layers
@@ -175,6 +177,7 @@ fn six_flux_emits_its_largest_lobe_count_on_the_gpu() {
         sigma_s: [0.8, 0.5, 0.3],
         sigma_a: [0.05, 0.1, 0.2],
         g: 0.3,
+        diffuse: None,
     };
     for n in [1usize, 3] {
         let variant: VariantKey = format!("model=tm6,max_layers={n}").parse().unwrap();

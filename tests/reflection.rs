@@ -517,6 +517,7 @@ fn material_and_frame_blocks_have_the_host_layout() {
                 at(offset_of!(LayerGpu, sigma_s)),
                 at(offset_of!(LayerGpu, sigma_a)),
                 at(offset_of!(LayerGpu, params)),
+                at(offset_of!(LayerGpu, diffuse)),
             ]
         );
 
@@ -528,6 +529,7 @@ fn material_and_frame_blocks_have_the_host_layout() {
                 at(offset_of!(FrameConstants, inv_view_proj)),
                 at(offset_of!(FrameConstants, camera_pos)),
                 at(offset_of!(FrameConstants, params)),
+                at(offset_of!(FrameConstants, irradiance)),
             ]
         );
         for matrix in 0..2 {

@@ -16,6 +16,9 @@ pub struct SheetArgs {
     /// Variants, one column each (default: model=tm2 and model=tm6).
     #[arg(long = "variant", value_name = "KEY")]
     variants: Vec<String>,
+    /// Materials, one row each: presets or files (default: every preset).
+    #[arg(long = "material", value_name = "NAME|FILE")]
+    materials: Vec<String>,
     /// Side of one tile in pixels (1 to 16384).
     #[arg(
         long,
@@ -41,7 +44,11 @@ pub fn run(global: &GlobalArgs, args: &SheetArgs) -> Result<()> {
     } else {
         args.variants.iter().map(String::as_str).collect()
     };
-    let rows = sheet::preset_rows()?;
+    let rows = if args.materials.is_empty() {
+        sheet::preset_rows()?
+    } else {
+        sheet::rows_of(&args.materials)?
+    };
     let columns = sheet::columns(&rows, &keys)?;
     let gpu = global.open_gpu()?;
     let lighting = args.env.lights.lighting()?;

@@ -24,6 +24,7 @@ const LAYER_KEYS: &[&str] = &[
     "sigma_a",
     "g",
     "coverage",
+    "diffuse",
 ];
 const MEDIUM_KEYS: &[&str] = &["depth", "sigma_s", "sigma_a", "g"];
 const CHANNELS: [&str; 3] = ["R", "G", "B"];
@@ -83,6 +84,9 @@ impl LayerReader<'_> {
     /// The validated layer (maps read at their range's middle) and its maps.
     pub fn read(&self) -> Result<(LayerParams, LayerSurface), MaterialError> {
         self.check_keys()?;
+        if self.has("diffuse") {
+            return self.diffuse_base();
+        }
         let (ior, kappa) = self.interface()?;
         let roughness = self.scalar("roughness", &UNIT)?.ok_or_else(|| {
             self.error(
@@ -98,6 +102,7 @@ impl LayerReader<'_> {
             sigma_s: self.rgb("sigma_s", &SIGMA)?.unwrap_or([0.0; 3]),
             sigma_a: self.rgb("sigma_a", &SIGMA)?.unwrap_or([0.0; 3]),
             g: self.scalar("g", &HG_G)?.unwrap_or(0.0),
+            diffuse: None,
         };
         self.check_conductor_and_medium(&layer)?;
         self.coverage()?;
@@ -108,6 +113,50 @@ impl LayerReader<'_> {
                 .any(|(f, _)| matches!(f, Field::F0 | Field::EdgeTint))
         });
         Ok((layer, LayerSurface { sources, artist }))
+    }
+
+    /// A Lambertian base (`diffuse = [r, g, b]`, albedo in [0, 1]): the last layer, with no
+    /// interface of its own (it lies in the medium above) and no other field but `coverage`.
+    /// Its roughness is the roughest, α = 1: the asymmetry of its reflection that the layers
+    /// above see (`model::diffuse`).
+    fn diffuse_base(&self) -> Result<(LayerParams, LayerSurface), MaterialError> {
+        if !self.is_last {
+            return Err(self.error(
+                "diffuse",
+                "a diffuse base is opaque and ends the stack: it must be the last layer",
+            ));
+        }
+        if let Some(key) = self
+            .table
+            .keys()
+            .find(|k| !matches!(k.as_str(), "diffuse" | "coverage"))
+        {
+            return Err(self.error(
+                key,
+                "a diffuse base has only `diffuse` (its albedo) and `coverage`: it has no \
+                 interface of its own and no medium",
+            ));
+        }
+        let rho = self.rgb("diffuse", &UNIT)?.expect("checked above");
+        let layer = LayerParams {
+            ior: [1.0; 3],
+            kappa: [0.0; 3],
+            roughness: 1.0,
+            depth: 0.0,
+            sigma_s: [0.0; 3],
+            sigma_a: [0.0; 3],
+            g: 0.0,
+            diffuse: Some(rho),
+        };
+        self.coverage()?;
+        let sources = self.sources.take();
+        Ok((
+            layer,
+            LayerSurface {
+                sources,
+                artist: None,
+            },
+        ))
     }
 
     /// `coverage`: a number in [0, 1] (one value everywhere) or a map.

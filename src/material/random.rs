@@ -61,6 +61,7 @@ pub fn random_stack(rng: &mut Rng, model: Option<Model>, max_layers: usize) -> (
                     sigma_s: [0.0; 3],
                     sigma_a: [0.0; 3],
                     g: 0.0,
+                    diffuse: None,
                 };
             }
             // Relative IORs at, next to and far from 1, below 1 as often as above.
@@ -98,6 +99,7 @@ pub fn random_stack(rng: &mut Rng, model: Option<Model>, max_layers: usize) -> (
                 } else {
                     0.0
                 },
+                diffuse: None,
             }
         })
         .collect();

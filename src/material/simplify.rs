@@ -355,7 +355,8 @@ pub(super) fn roles(layers: &[LayerParams]) -> Vec<Role> {
         .iter()
         .enumerate()
         .map(|(i, layer)| {
-            if layer.is_conductor() {
+            // A diffuse base ends the stack as a conductor does; it has no interface to match.
+            if layer.is_opaque_base() {
                 return Role::Conductor;
             }
             let eta = avg(layer.ior) / eta_above;

@@ -141,6 +141,7 @@ fn clear(ior: [f64; 3], roughness: f64) -> LayerParams {
         sigma_s: [0.0; 3],
         sigma_a: [0.0; 3],
         g: 0.0,
+        diffuse: None,
     }
 }
 

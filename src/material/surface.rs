@@ -66,6 +66,7 @@ pub enum Field {
     SigmaA,
     G,
     Coverage,
+    Diffuse,
 }
 
 impl Field {
@@ -81,6 +82,7 @@ impl Field {
             "sigma_a" => Self::SigmaA,
             "g" => Self::G,
             "coverage" => Self::Coverage,
+            "diffuse" => Self::Diffuse,
             _ => return None,
         })
     }
@@ -97,6 +99,7 @@ impl Field {
             Self::SigmaA => "sigma_a",
             Self::G => "g",
             Self::Coverage => "coverage",
+            Self::Diffuse => "diffuse",
         }
     }
 
@@ -104,7 +107,13 @@ impl Field {
     pub fn is_rgb(self) -> bool {
         matches!(
             self,
-            Self::Ior | Self::Kappa | Self::F0 | Self::EdgeTint | Self::SigmaS | Self::SigmaA
+            Self::Ior
+                | Self::Kappa
+                | Self::F0
+                | Self::EdgeTint
+                | Self::SigmaS
+                | Self::SigmaA
+                | Self::Diffuse
         )
     }
 }
@@ -241,13 +250,14 @@ pub struct Surface {
 }
 
 /// The GPU's form of a [`Surface`]: square slices of `resolution`² RGBA texels, and per layer
-/// two codes of four bytes, one per field — x: η, κ, σs, σa; y: α, depth, g, coverage — each 0
-/// (constant) or 1 + the slice's index, with bit 7 set for screen coordinates.
+/// three codes of four bytes, one per field — x: η, κ, σs, σa; y: α, depth, g, coverage; z:
+/// the diffuse albedo — each 0 (constant) or 1 + the slice's index, with bit 7 set for screen
+/// coordinates.
 #[derive(Clone, PartialEq)]
 pub struct SurfaceMaps {
     pub resolution: u32,
     pub slices: Vec<Vec<[f32; 4]>>,
-    pub codes: Vec<[u32; 2]>,
+    pub codes: Vec<[u32; 3]>,
 }
 
 impl std::fmt::Debug for SurfaceMaps {
@@ -275,6 +285,7 @@ fn gpu_slot(field: Field) -> (usize, u32) {
         Field::Depth => (1, 8),
         Field::G => (1, 16),
         Field::Coverage => (1, 24),
+        Field::Diffuse => (2, 0),
     }
 }
 
@@ -352,6 +363,10 @@ impl SurfaceMaps {
                     }
                 }
             }
+            let code = self.code(i, Field::Diffuse);
+            if code != 0 {
+                layer.diffuse = Some(rgb(code));
+            }
             for field in [Field::Roughness, Field::Depth, Field::G] {
                 let code = self.code(i, field);
                 if code != 0 {
@@ -408,7 +423,7 @@ impl Surface {
                 .collect()
         };
         let mut slices: Vec<Vec<[f32; 4]>> = Vec::new();
-        let mut codes = vec![[0u32; 2]; layers.len()];
+        let mut codes = vec![[0u32; 3]; layers.len()];
         for (index, surface) in layers.iter().enumerate() {
             let layer = &base[index];
             let error = |field: &str, message: String| MaterialError::Field {

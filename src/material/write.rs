@@ -25,6 +25,16 @@ fn field_text(surface: Option<&LayerSurface>, field: Field, constant: String) ->
 
 fn layer_text(layer: &LayerParams, surface: Option<&LayerSurface>, with_medium: bool) -> String {
     let text = |field: Field, constant: String| field_text(surface, field, constant);
+    let coverage = match surface.and_then(|s| s.source(Field::Coverage)) {
+        Some(coverage) => format!("coverage = {}\n", source_text(coverage)),
+        None => String::new(),
+    };
+    if let Some(rho) = layer.diffuse {
+        return format!(
+            "\n[[layer]]\ndiffuse = {}\n{coverage}",
+            text(Field::Diffuse, rgb_text(rho))
+        );
+    }
     let interface = match surface.and_then(|s| s.artist) {
         Some((f0, tint)) => format!(
             "f0 = {}\nedge_tint = {}\n",
@@ -50,10 +60,7 @@ fn layer_text(layer: &LayerParams, surface: Option<&LayerSurface>, with_medium: 
             text(Field::G, format!("{:?}", layer.g))
         );
     }
-    if let Some(coverage) = surface.and_then(|s| s.source(Field::Coverage)) {
-        out += &format!("coverage = {}\n", source_text(coverage));
-    }
-    out
+    out + &coverage
 }
 
 /// The TOML text of `stack`.
@@ -64,7 +71,7 @@ pub(super) fn write(stack: &Stack) -> String {
         out += &format!("map_resolution = {}\n", surface.resolution);
     }
     for (i, layer) in stack.layers.iter().enumerate() {
-        let with_medium = stack.model == Model::Tm6 && !layer.is_conductor();
+        let with_medium = stack.model == Model::Tm6 && !layer.is_opaque_base();
         let surface = stack.surface.as_ref().and_then(|s| s.layers.get(i));
         out += &layer_text(layer, surface, with_medium);
     }

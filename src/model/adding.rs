@@ -78,6 +78,20 @@ impl Component {
         }
     }
 
+    /// A component that is the same seen from above and below, per channel (a medium crossed
+    /// by diffuse light: `model::diffuse`).
+    pub fn symmetric(r: Rgb, t: Rgb) -> Self {
+        let one_minus_r = map3(|c| 1.0 - r[c]);
+        Self {
+            r,
+            t,
+            rp: r,
+            tp: t,
+            one_minus_r,
+            one_minus_rp: one_minus_r,
+        }
+    }
+
     /// Factors that are not energies (the g-weighted ones of the asymmetry composition).
     pub fn weighted(r: f64, t: f64, rp: f64, tp: f64) -> Self {
         Self {

@@ -41,11 +41,13 @@ pub const MIN_ALPHA_FP16: f64 = 1e-2;
 /// Grid side of the quadrature [`lobe_albedo`] integrates with ([`for_each_lobe_direction`]).
 const ALBEDO_GRID: u32 = 256;
 
-/// How a lobe is oriented: about the mirror direction of the view, or about the view itself.
+/// How a lobe is oriented: about the mirror direction of the view, or about the view itself;
+/// or a diffuse base's Lambertian lobe (`model::diffuse`), the same for every view.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LobeKind {
     Mirror,
     Retro,
+    Diffuse,
 }
 
 /// The roughness a lobe of roughness `alpha` is shaded with under a light of angular radius
@@ -130,7 +132,7 @@ pub fn unnormalised_lobe(g2: G2, ndf_form: Ndf, v: DVec3, l: DVec3, alpha: f64) 
 /// The view a lobe of `kind` is evaluated with: `v`, or its mirror image about the normal.
 pub fn lobe_view(v: DVec3, kind: LobeKind) -> DVec3 {
     match kind {
-        LobeKind::Mirror => v,
+        LobeKind::Mirror | LobeKind::Diffuse => v,
         LobeKind::Retro => DVec3::new(-v.x, -v.y, v.z),
     }
 }
@@ -162,7 +164,9 @@ impl LitLobes {
             .iter()
             .enumerate()
             .map(|(k, lobe)| {
-                let kind = if k < 32 && retro_mask & (1 << k) != 0 {
+                let kind = if lobe.diffuse {
+                    LobeKind::Diffuse
+                } else if k < 32 && retro_mask & (1 << k) != 0 {
                     LobeKind::Retro
                 } else {
                     LobeKind::Mirror
@@ -184,6 +188,10 @@ impl LitLobes {
         self.lobes
             .iter()
             .map(|&(weight, kind, alpha, e)| {
+                if kind == LobeKind::Diffuse {
+                    // Lambertian: μ_l/π, which integrates to 1 over the light directions.
+                    return weight.map(|w| w * l.z.max(0.0) / std::f64::consts::PI);
+                }
                 let v = lobe_view(self.v, kind);
                 let value = unnormalised_lobe(self.shading.g2, self.shading.ndf, v, l, alpha);
                 weight.map(|w| w * value / e)

@@ -12,6 +12,7 @@
 //! κ_{i+1}/η_i; roughness is GGX α.
 
 pub(crate) mod adding;
+pub mod diffuse;
 pub mod fgd;
 pub mod fresnel;
 pub mod hg;
@@ -48,11 +49,23 @@ pub struct LayerParams {
     pub sigma_a: [f64; 3],
     /// Henyey–Greenstein asymmetry of the medium's phase function.
     pub g: f64,
+    /// `Some(ρ)`: a Lambertian base of albedo ρ (RGB) in the medium above, which ends the
+    /// stack ([`diffuse`]); its interface fields are unused.
+    pub diffuse: Option<[f64; 3]>,
 }
 
 impl LayerParams {
     pub fn is_conductor(&self) -> bool {
         self.kappa.iter().any(|&k| k > 0.0)
+    }
+
+    pub fn is_diffuse(&self) -> bool {
+        self.diffuse.is_some()
+    }
+
+    /// Whether the layer ends the stack: a conductor or a diffuse base.
+    pub fn is_opaque_base(&self) -> bool {
+        self.is_conductor() || self.is_diffuse()
     }
 }
 
@@ -61,6 +74,8 @@ impl LayerParams {
 pub struct Lobe {
     pub weight: [f64; 3],
     pub roughness: f64,
+    /// A diffuse base's Lambertian lobe (`roughness` then unused; [`diffuse`]).
+    pub diffuse: bool,
 }
 
 /// What the model gives for one view direction.

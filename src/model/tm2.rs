@@ -6,7 +6,8 @@
 
 use super::adding::{avg, bound, map3, Component, Slab};
 use super::{
-    albedo, hg, Evaluation, Fgd, LayerParams, Lobe, Tir, INDEX_MATCHED, IOR_AIR, REFLECTS_NOTHING,
+    albedo, diffuse, hg, Evaluation, Fgd, LayerParams, Lobe, Tir, INDEX_MATCHED, IOR_AIR,
+    REFLECTS_NOTHING,
 };
 
 /// |cos| of the mean direction refracted from `cos_i` through relative IOR η; 0 when the mean
@@ -69,6 +70,18 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
     let mut transmittance = [0.0; 3];
     let mut lobes = Vec::with_capacity(stack.len());
     for (i, layer) in stack.iter().enumerate() {
+        if let Some(rho) = layer.diffuse {
+            // A Lambertian base under the layers above (`diffuse`): one diffuse lobe.
+            let weight = diffuse::lobe_weight(e.t, rho, &diffuse::slab(&stack[..i], false));
+            lobes.push(Lobe {
+                weight,
+                roughness: 1.0,
+                diffuse: true,
+            });
+            r_prev = map3(|c| r_prev[c] + weight[c]);
+            transmittance = [0.0; 3];
+            break;
+        }
         let (r_total, g_total, g_t0j) = match relative_eta(layer, eta_above) {
             None => {
                 let r_c = map3(|c| {
@@ -133,6 +146,7 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
         lobes.push(Lobe {
             weight,
             roughness: hg::alpha_of_g(lobe_g),
+            diffuse: false,
         });
         r_prev = r_total;
         g_prev = g_total;
@@ -165,6 +179,7 @@ pub(crate) mod tests {
             sigma_s: [0.0; 3],
             sigma_a: [0.0; 3],
             g: 0.0,
+            diffuse: None,
         }
     }
 

@@ -16,7 +16,7 @@
 use super::adding::{avg, bound, map3, Component, Component6, Rgb, Slab6};
 use super::hg::{self, safe_ratio};
 use super::tm2;
-use super::{albedo, Evaluation, Fgd, LayerParams, Lobe, Tir, INDEX_MATCHED, IOR_AIR};
+use super::{albedo, diffuse, Evaluation, Fgd, LayerParams, Lobe, Tir, INDEX_MATCHED, IOR_AIR};
 
 /// 1 − e^{−x} for x ≥ 0, without cancellation at small x.
 fn one_minus_exp_neg(x: f64) -> f64 {
@@ -24,12 +24,12 @@ fn one_minus_exp_neg(x: f64) -> f64 {
 }
 
 /// A medium's two-stream factors (§5.3, numerics §5.8).
-struct Medium {
-    t: Rgb,
-    r_fb: Rgb,
-    t_ff: Rgb,
-    g_rfb: f64,
-    g_tff: f64,
+pub(crate) struct Medium {
+    pub t: Rgb,
+    pub r_fb: Rgb,
+    pub t_ff: Rgb,
+    pub g_rfb: f64,
+    pub g_tff: f64,
 }
 
 /// Back-reflection and forward transmission of the two-stream system (a, b) over optical
@@ -48,7 +48,7 @@ fn two_stream(a: f64, b: f64, a_minus_b: f64, a_plus_b: f64, tau: f64) -> (f64, 
 /// The two-stream factors of a medium (energies, then g-weighted), with a = σ_ext − σ_sf and
 /// b = σ_sb, resp. a_g = σ_ext − g·σ_sf and b_g = −g·σ_sb; their sums and differences written
 /// as sums of non-negative terms.
-fn medium_factors(layer: &LayerParams, mu: f64) -> Medium {
+pub(crate) fn medium_factors(layer: &LayerParams, mu: f64) -> Medium {
     let g = layer.g;
     let tau = layer.depth / mu.max(1e-7);
     let (mut r_fb, mut t_ff) = ([0.0; 3], [0.0; 3]);
@@ -98,6 +98,20 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
     let mut transmittance = [0.0; 3];
     let mut lobes = Vec::new();
     for (i, layer) in stack.iter().enumerate() {
+        if let Some(rho) = layer.diffuse {
+            // A Lambertian base under the layers above (`diffuse`): every flux class that
+            // reaches it feeds one diffuse lobe.
+            let t_view = map3(|c| e.down[0][c] + e.down[1][c] + e.down[2][c]);
+            let weight = diffuse::lobe_weight(t_view, rho, &diffuse::slab(&stack[..i], true));
+            lobes.push(Lobe {
+                weight,
+                roughness: 1.0,
+                diffuse: true,
+            });
+            prev[0] = map3(|c| prev[0][c] + weight[c]);
+            transmittance = [0.0; 3];
+            break;
+        }
         let mut steps = Vec::with_capacity(2);
         if layer.is_conductor() {
             let r_c = map3(|c| {
@@ -216,6 +230,7 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
                     lobes.push(Lobe {
                         weight: map3(|c| (up[k][c] - prev[k][c]).max(0.0)),
                         roughness: hg::alpha_of_g(g_lobe.min(1.0)),
+                        diffuse: false,
                     });
                 }
                 prev[k] = up[k];

@@ -137,6 +137,8 @@ impl BakedTable {
                 Lobe {
                     weight: [lerp(0), lerp(1), lerp(2)],
                     roughness: lerp(3) * lerp(3),
+                    // A diffuse base is never baked (specialize.rs refuses it).
+                    diffuse: false,
                 }
             })
             .collect()

@@ -289,7 +289,9 @@ fn unpack(chunk: &[[f32; 4]]) -> GpuEvaluation {
                 .iter()
                 .map(|&v| Lobe {
                     weight: rgb(v),
-                    roughness: f64::from(v[3]),
+                    // A diffuse base's lobe reads back with α = −1 (tm_eval.comp.glsl).
+                    roughness: if v[3] < 0.0 { 1.0 } else { f64::from(v[3]) },
+                    diffuse: v[3] < 0.0,
                 })
                 .collect(),
         },

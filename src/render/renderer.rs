@@ -328,6 +328,7 @@ impl<'g> Renderer<'g> {
                 0.0,
                 0.0,
             ],
+            irradiance: self.environment.irradiance,
         };
         let uniforms = Buffer::with_data(
             device,

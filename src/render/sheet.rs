@@ -30,18 +30,29 @@ const GAP: usize = 4;
 /// The columns when none are asked for: every preset in each model.
 pub const DEFAULT_COLUMNS: [&str; 2] = ["model=tm2", "model=tm6"];
 
+impl From<Stack> for SheetRow {
+    fn from(stack: Stack) -> Self {
+        Self {
+            name: stack.name,
+            layers: stack.layers,
+            surface: stack.surface,
+        }
+    }
+}
+
 /// One row per preset material (`assets/materials/`), in the presets' order.
 pub fn preset_rows() -> Result<Vec<SheetRow>> {
     presets()
         .iter()
-        .map(|path| {
-            let stack = Stack::load(path)?;
-            Ok(SheetRow {
-                name: stack.name,
-                layers: stack.layers,
-                surface: stack.surface,
-            })
-        })
+        .map(|path| Ok(Stack::load(path)?.into()))
+        .collect()
+}
+
+/// One row per material named (a preset or a file, [`Stack::resolve`]), in order.
+pub fn rows_of(materials: &[String]) -> Result<Vec<SheetRow>> {
+    materials
+        .iter()
+        .map(|spec| Ok(Stack::resolve(spec)?.into()))
         .collect()
 }
 

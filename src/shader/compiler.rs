@@ -154,7 +154,8 @@ fn layer_values_glsl() -> String {
         let v = |names: [&str; 3]| names.map(|n| format!("LAYER{layer}_{n}")).join(", ");
         out.push_str(&format!(
             "    case {layer}u: return LayerGpu(vec4({}, 0.0), vec4({}, 0.0), vec4({}, 0.0), \
-             vec4({}, 0.0), vec4(LAYER{layer}_ALPHA, LAYER{layer}_DEPTH, LAYER{layer}_G, 0.0));\n",
+             vec4({}, 0.0), vec4(LAYER{layer}_ALPHA, LAYER{layer}_DEPTH, LAYER{layer}_G, 0.0), \
+             vec4(0.0));\n",
             v(["IOR_R", "IOR_G", "IOR_B"]),
             v(["KAPPA_R", "KAPPA_G", "KAPPA_B"]),
             v(["SIGMA_S_R", "SIGMA_S_G", "SIGMA_S_B"]),
@@ -203,6 +204,25 @@ fn codes_glsl() -> String {
     ] {
         out.push_str(&format!("#define {name} {value:e}\n"));
     }
+    // The Gauss–Legendre rule of the hemispherical Fresnel averages (model::diffuse), over
+    // s = √μ on [0, 1].
+    let rule = crate::model::diffuse::gauss_legendre_unit(crate::model::diffuse::HEMISPHERE_POINTS);
+    let list = |f: &dyn Fn(&(f64, f64)) -> f64| {
+        rule.iter()
+            .map(|p| format!("{:e}", f(p)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let n = rule.len();
+    out.push_str(&format!("#define HEMISPHERE_POINTS {n}\n"));
+    out.push_str(&format!(
+        "const float HEMISPHERE_MU[{n}] = float[{n}]({});\n",
+        list(&|p| p.0)
+    ));
+    out.push_str(&format!(
+        "const float HEMISPHERE_W[{n}] = float[{n}]({});\n",
+        list(&|p| p.1)
+    ));
     out.push_str("#endif\n");
     out
 }

@@ -26,9 +26,13 @@ pub struct FrameConstants {
     pub camera_pos: [f32; 4],
     /// x: mip count of the prefiltered environment.
     pub params: [f32; 4],
+    /// The environment's irradiance in order-2 spherical harmonics
+    /// (`tables::environment::irradiance_sh`).
+    pub irradiance: [[f32; 4]; 9],
 }
 
-const _: () = assert!(size_of::<FrameConstants>() == 160);
+const _: () = assert!(size_of::<FrameConstants>() == 160 + 9 * 16);
+const _: () = assert!(offset_of!(FrameConstants, irradiance) == 160);
 const _: () = assert!(offset_of!(FrameConstants, inv_view_proj) == 64);
 const _: () = assert!(offset_of!(FrameConstants, camera_pos) == 128);
 const _: () = assert!(offset_of!(FrameConstants, params) == 144);
@@ -43,6 +47,8 @@ pub struct LayerGpu {
     pub sigma_a: [f32; 4],
     /// x: GGX α of the top interface, y: medium depth, z: HG g.
     pub params: [f32; 4],
+    /// w = 1: a diffuse base of albedo rgb (`model::diffuse`).
+    pub diffuse: [f32; 4],
 }
 
 #[repr(C)]
@@ -52,15 +58,15 @@ pub struct MaterialGpu {
     pub info: [u32; 4],
     pub layers: [LayerGpu; MAX_LAYERS_LIMIT as usize],
     /// Per layer, the maps of its varying fields ([`SurfaceMaps`]'s codes: x: η, κ, σs, σa;
-    /// y: α, depth, g, coverage, a byte each); zeros for a uniform stack.
+    /// y: α, depth, g, coverage; z: diffuse albedo, a byte each); zeros for a uniform stack.
     pub maps: [[u32; 4]; MAX_LAYERS_LIMIT as usize],
 }
 
-const _: () = assert!(size_of::<LayerGpu>() == 80);
+const _: () = assert!(size_of::<LayerGpu>() == 96);
 const _: () = assert!(offset_of!(LayerGpu, params) == 64);
-const _: () = assert!(size_of::<MaterialGpu>() == 16 + 96 * MAX_LAYERS_LIMIT as usize);
+const _: () = assert!(size_of::<MaterialGpu>() == 16 + 112 * MAX_LAYERS_LIMIT as usize);
 const _: () = assert!(offset_of!(MaterialGpu, layers) == 16);
-const _: () = assert!(offset_of!(MaterialGpu, maps) == 16 + 80 * MAX_LAYERS_LIMIT as usize);
+const _: () = assert!(offset_of!(MaterialGpu, maps) == 16 + 96 * MAX_LAYERS_LIMIT as usize);
 
 impl MaterialGpu {
     /// Packs `layers` (top first); at most [`MAX_LAYERS_LIMIT`] layers, which the material
@@ -83,6 +89,10 @@ impl MaterialGpu {
                 sigma_s: rgb(src.sigma_s),
                 sigma_a: rgb(src.sigma_a),
                 params: [src.roughness as f32, src.depth as f32, src.g as f32, 0.0],
+                diffuse: match src.diffuse {
+                    Some(rho) => [rho[0] as f32, rho[1] as f32, rho[2] as f32, 1.0],
+                    None => [0.0; 4],
+                },
             };
         }
         gpu
@@ -91,7 +101,7 @@ impl MaterialGpu {
     /// With the map codes of a spatially varying stack (one per layer, top first).
     pub fn with_maps(mut self, maps: &SurfaceMaps) -> Self {
         for (dst, code) in self.maps.iter_mut().zip(&maps.codes) {
-            *dst = [code[0], code[1], 0, 0];
+            *dst = [code[0], code[1], code[2], 0];
         }
         self
     }

@@ -19,6 +19,8 @@ pub enum SpecializeError {
     ConductorAbove { layer: usize },
     #[error("mode=baked holds at most {max} lobes; the stack has {count} (use mode=specialized)")]
     TooManyLobes { count: usize, max: usize },
+    #[error("layer {layer} is a diffuse base; per-material pipelines do not know that layer kind: shade it under mode=generic")]
+    DiffuseBase { layer: usize },
 }
 
 /// A material's structure: what a specialized pipeline knows about it. Masks hold bit `i` for
@@ -60,6 +62,9 @@ impl Structure {
         let mut eta_above = IOR_AIR;
         for (i, layer) in layers.iter().enumerate() {
             let bit = 1u32 << i;
+            if layer.is_diffuse() {
+                return Err(SpecializeError::DiffuseBase { layer: i + 1 });
+            }
             if layer.roughness == 0.0 {
                 s.smooth_mask |= bit;
             }
@@ -187,6 +192,7 @@ mod tests {
             sigma_s: [1.0; 3],
             sigma_a: [0.1; 3],
             g: 0.3,
+            diffuse: None,
         }
     }
 

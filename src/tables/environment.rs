@@ -88,6 +88,9 @@ pub struct Environment {
     pub cube: Image,
     pub view: ImageView,
     pub desc: EnvDesc,
+    /// The irradiance's order-2 spherical harmonics ([`irradiance_sh`]), which the forward
+    /// pass lights a diffuse base with.
+    pub irradiance: [[f32; 4]; 9],
 }
 
 impl Environment {
@@ -251,7 +254,12 @@ impl Environment {
         })?;
 
         let view = cube.view("environment prefiltered cube")?;
-        Ok(Self { cube, view, desc })
+        Ok(Self {
+            cube,
+            view,
+            desc,
+            irradiance: irradiance_sh(equirect),
+        })
     }
 
     /// Reads mip `mip` back as RGBA f32 texels, face-major (faces in Vulkan order), rows top to
@@ -265,6 +273,69 @@ impl Environment {
             .map(|c| [c[0].to_f32(), c[1].to_f32(), c[2].to_f32(), c[3].to_f32()])
             .collect())
     }
+}
+
+/// The real spherical harmonics of order ≤ 2 at unit direction `d`, in the order Y00, Y1−1,
+/// Y10, Y11, Y2−2, Y2−1, Y20, Y21, Y22 (Ramamoorthi & Hanrahan 2001, eq. 3; the constants of
+/// `ibl_irradiance` in `glsl/include/lib/ibl.glsl`).
+pub fn sh9(d: DVec3) -> [f64; 9] {
+    [
+        0.282095,
+        0.488603 * d.y,
+        0.488603 * d.z,
+        0.488603 * d.x,
+        1.092548 * d.x * d.y,
+        1.092548 * d.y * d.z,
+        0.315392 * (3.0 * d.z * d.z - 1.0),
+        1.092548 * d.x * d.z,
+        0.546274 * (d.x * d.x - d.y * d.y),
+    ]
+}
+
+/// The irradiance E(n) = ∫ L(ω) max(n·ω, 0) dω of an equirectangular environment, as the
+/// coefficients of its order-2 spherical harmonics, each times its band's cosine-lobe factor
+/// Â_l = π, 2π/3, π/4 (Ramamoorthi & Hanrahan, "An Efficient Representation for Irradiance
+/// Environment Maps", 2001): E(n) = Σ_k c_k·Y_k(n), within about 1 % of the exact convolution
+/// for natural lighting (their §3; exact for a uniform environment). Projected by summing every
+/// texel, each the solid angle it spans (2π/W)(π/H)·sin θ, the direction through its centre by
+/// [`equirect_uv`]'s mapping.
+pub fn irradiance_sh(equirect: &HdrImage) -> [[f32; 4]; 9] {
+    let (w, h) = (equirect.width, equirect.height);
+    let mut sum = [[0.0f64; 3]; 9];
+    for y in 0..h {
+        let theta = PI * (y as f64 + 0.5) / h as f64;
+        let d_omega = (2.0 * PI / w as f64) * (PI / h as f64) * theta.sin();
+        for x in 0..w {
+            let phi = 2.0 * PI * ((x as f64 + 0.5) / w as f64 - 0.5);
+            let d = DVec3::new(
+                theta.sin() * phi.sin(),
+                theta.cos(),
+                -theta.sin() * phi.cos(),
+            );
+            let p = equirect.pixel(x, y);
+            for (k, y_k) in sh9(d).iter().enumerate() {
+                for c in 0..3 {
+                    sum[k][c] += f64::from(p[c]) * y_k * d_omega;
+                }
+            }
+        }
+    }
+    let band = [PI, 2.0 * PI / 3.0, PI / 4.0];
+    std::array::from_fn(|k| {
+        let a = band[if k == 0 {
+            0
+        } else if k < 4 {
+            1
+        } else {
+            2
+        }];
+        [
+            (a * sum[k][0]) as f32,
+            (a * sum[k][1]) as f32,
+            (a * sum[k][2]) as f32,
+            0.0,
+        ]
+    })
 }
 
 /// Direction through cube face `face` at face coordinates (u, v) ∈ [0,1]²: the CPU mirror of

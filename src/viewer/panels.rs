@@ -490,6 +490,7 @@ impl LayerOp {
                         sigma_s: [0.0; 3],
                         sigma_a: [0.0; 3],
                         g: 0.0,
+                        diffuse: None,
                     },
                 );
                 artist.insert(0, None);

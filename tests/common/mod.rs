@@ -57,5 +57,6 @@ pub fn gold() -> Vec<LayerParams> {
         sigma_s: [0.0; 3],
         sigma_a: [0.0; 3],
         g: 0.0,
+        diffuse: None,
     }]
 }

@@ -26,4 +26,18 @@ vec3 ibl_dominant_direction(vec3 n, vec3 r, float alpha) {
     return mix(n, r, f);
 }
 
+// The irradiance E(n) of an environment given by its order-2 spherical-harmonic coefficients,
+// each already times its band's cosine-lobe factor Â_l (π, 2π/3, π/4): Ramamoorthi & Hanrahan,
+// "An Efficient Representation for Irradiance Environment Maps" (2001). The coefficients come
+// from tables::environment::irradiance_sh, in the order Y00, Y1−1, Y10, Y11, Y2−2, Y2−1, Y20,
+// Y21, Y22.
+vec3 ibl_irradiance(vec3 n, vec4 c[9]) {
+    vec3 e = c[0].rgb * 0.282095;
+    e += c[1].rgb * (0.488603 * n.y) + c[2].rgb * (0.488603 * n.z) + c[3].rgb * (0.488603 * n.x);
+    e += c[4].rgb * (1.092548 * n.x * n.y) + c[5].rgb * (1.092548 * n.y * n.z);
+    e += c[6].rgb * (0.315392 * (3.0 * n.z * n.z - 1.0)) + c[7].rgb * (1.092548 * n.x * n.z);
+    e += c[8].rgb * (0.546274 * (n.x * n.x - n.y * n.y));
+    return max(e, vec3(0.0));
+}
+
 #endif

@@ -18,6 +18,8 @@ struct Tm2Factors {
     real3 r, t, rp, tp;
     float gr, gt, grp, gtp;
     bool conductor;
+    bool diffuse;     // a Lambertian base of albedo `rho` (src/model/diffuse.rs)
+    vec3 rho;
     bool skip;        // η_ij ≈ 1: no interface (ENoComponent)
     float mu;         // |cos| of the mean incident direction on the component
     float mu_t;       // |cos| of the mean refracted direction below it
@@ -35,9 +37,20 @@ Tm2Factors tm2_factor(uint i, inout float eta_above, inout float cos_i) {
     c.gr = hg_g_of_alpha(c.alpha);
     c.grp = c.gr;
     c.conductor = tm_conductor_at(i, layer);
+    c.diffuse = !SPECIALIZED && tm_is_diffuse(layer);
+    c.rho = layer.diffuse.rgb;
     c.skip = false;
     c.eta = 1.0;
     c.mu_t = cos_i;
+    if (c.diffuse) {
+        c.r = real3(0.0);
+        c.t = real3(0.0);
+        c.rp = real3(0.0);
+        c.tp = real3(0.0);
+        c.gt = 0.0;
+        c.gtp = 0.0;
+        return c;
+    }
     if (c.conductor) {
         vec3 eta = layer.ior.rgb / eta_above;
         vec3 kappa = layer.kappa.rgb / eta_above;
@@ -94,7 +107,7 @@ void tm2_factors(float mu, inout Tm2Factors comps[MAX_LAYERS], out uint count) {
     count = tm_layer_count();
     for (uint i = 0u; i < count; ++i) {
         comps[i] = tm2_factor(i, eta_above, cos_i);
-        if (comps[i].conductor) {
+        if (comps[i].conductor || comps[i].diffuse) {
             count = i + 1u;
             return;
         }
@@ -117,6 +130,14 @@ void tm2_add(uint i, Tm2Factors c, float g_next, inout Tm2State s, inout vec3 tr
     real3 r_total;
     real g_total;
     float g_t0j = s.g_t0i;
+    if (c.diffuse) {
+        // A Lambertian base under the layers above: one diffuse lobe, nothing transmitted.
+        vec3 weight = tm_diffuse_weight(vec3(s.e.t), c.rho, tm_diffuse_slab(i, false));
+        tm_emit_lobe(weight, 1.0, LOBE_DIFFUSE);
+        s.r_prev += real3(weight);
+        transmittance = vec3(0.0);
+        return;
+    }
     if (c.conductor) {
         r_total = tm_over_base(s.e, c.r);
         g_total = tm_bound(tm_over_base1(s.g, tm_avg(c.r) * real(c.gr)), tm_avg(r_total));

@@ -324,6 +324,17 @@ bool tm6_step(uint step, uint layers, inout Tm6Walk w, inout vec3 transmittance)
     bool substrate = false;
     vec3 up[3] = w.e.up;
     vec3 up_g[3] = w.g.up;
+    if ((step & 1u) == 0u && !SPECIALIZED && tm_is_diffuse(layer)) {
+        // A Lambertian base under the layers above: every flux class reaching it feeds one
+        // diffuse lobe, which ends the walk.
+        vec3 t_view = vec3(w.e.down[0] + w.e.down[1] + w.e.down[2]);
+        vec3 weight = tm_diffuse_weight(t_view, layer.diffuse.rgb, tm_diffuse_slab(i, true));
+        tm_emit_lobe(weight, 1.0, LOBE_DIFFUSE);
+        w.lobe_count++;
+        w.prev[0] += weight;
+        transmittance = vec3(0.0);
+        return true;
+    }
     if ((step & 1u) == 0u && tm_conductor_at(i, layer)) {
         substrate = true;
         vec3 r_c = tm_albedo_rgb(i, w.cos_i, layer.params.x, layer.ior.rgb / w.eta_above,
@@ -441,6 +452,30 @@ bool tm6_step(uint step, uint layers, inout Tm6Walk w, inout vec3 transmittance)
         w.prev_g[k] = now_g;
     }
     return substrate;
+}
+
+TmSlab tm_diffuse_slab(uint count, bool media) {
+    TmSlab s = tm_slab_empty();
+    float eta_above = IOR_AIR;
+    for (uint i = 0u; i < count; ++i) {
+        LayerGpu layer = tm_layer(i);
+        float eta_layer = tm_mean(layer.ior.rgb);
+        float eta = eta_layer / eta_above;
+        if (abs(eta - 1.0) >= TM_INDEX_MATCHED) {
+            float down = tm_fresnel_hemispherical(eta);
+            float up = tm_fresnel_hemispherical(1.0 / eta);
+            s = tm_over(s, real3(down), real3(1.0 - down), real3(up), real3(1.0 - up));
+            eta_above = eta_layer;
+        }
+        if (media && layer.params.y > 0.0) {
+            vec3 transmission, r_fb, t_ff;
+            float g_rfb, g_tff;
+            tm6_medium_factors(layer, 0.5, transmission, r_fb, t_ff, g_rfb, g_tff);
+            // t_ff holds the unscattered transmission too (tm6_over_medium's arguments).
+            s = tm_over_symmetric(s, real3(r_fb), real3(t_ff));
+        }
+    }
+    return s;
 }
 
 // Walks the stack top to bottom for view cosine `mu` (tm6_step). Returns the lobe count. A

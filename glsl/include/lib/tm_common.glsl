@@ -20,6 +20,8 @@ const float IOR_AIR = 1.0;
 // view itself.
 #define LOBE_MIRROR 0u
 #define LOBE_RETRO 1u
+// A diffuse base's Lambertian lobe (src/model/diffuse.rs): lit by the irradiance.
+#define LOBE_DIFFUSE 2u
 
 // Largest lobe count of a variant: one per layer (2-flux); in 6-flux, the first interface
 // emits its primary lobe alone and each later component (medium, interface, …) up to three,
@@ -109,6 +111,47 @@ bool tm_is_conductor(LayerGpu layer) {
     return any(greaterThan(layer.kappa.rgb, vec3(0.0)));
 }
 
+bool tm_is_diffuse(LayerGpu layer) {
+    return layer.diffuse.w != 0.0;
+}
+
+// The stack `a` with a lossy component below it that is the same from above and below
+// (reflectance r, transmittance t: a medium crossed by diffuse light), by adding.rs's
+// general equations, with 1 − r − t absorbed.
+TmSlab tm_over_symmetric(TmSlab a, real3 r, real3 t) {
+    real3 one_minus_r = real3(1.0) - r;
+    real3 gap = real3(1.0) / max(a.q + a.rp * one_minus_r, real3(REAL_GAP_FLOOR));
+    real3 loss = one_minus_r - t;
+    return TmSlab(a.r + a.tp * r * a.t * gap, t * a.t * gap, r + t * a.rp * t * gap,
+                  a.tp * t * gap, t * (a.q + a.rp * loss) * gap + loss);
+}
+
+// The cosine-weighted hemispherical average of the dielectric Fresnel reflectance at relative
+// IOR η (src/model/diffuse.rs's fresnel_hemispherical): Gauss–Legendre in √μ from the rarer side,
+// reciprocity from the denser.
+float tm_fresnel_hemispherical(float eta) {
+    bool inside = eta < 1.0;
+    float n = inside ? 1.0 / eta : eta;
+    // μ = s²: 2μ dμ = 4s³ ds, the nodes crowded towards grazing incidence.
+    float sum = 0.0;
+    for (int k = 0; k < HEMISPHERE_POINTS; ++k) {
+        float s = HEMISPHERE_MU[k];
+        sum += HEMISPHERE_W[k] * 4.0 * s * s * s * fresnel_dielectric(s * s, n);
+    }
+    return inside ? 1.0 - eta * eta * (1.0 - sum) : sum;
+}
+
+// The first `count` layers as diffuse light sees them (src/model/diffuse.rs's slab), with the
+// 6-flux media crossed at μ = 1/2 when `media`. Defined in tm6.glsl, after the media.
+TmSlab tm_diffuse_slab(uint count, bool media);
+
+// The energy a diffuse base of albedo ρ sends back out through the stack above it, whose
+// transmittance towards it is `t_view` and whose diffuse slab is `d`: T·ρ·T′_d/(1 − ρR′_d).
+vec3 tm_diffuse_weight(vec3 t_view, vec3 rho, TmSlab d) {
+    vec3 den = max(vec3(d.q) + vec3(d.rp) * (vec3(1.0) - rho), vec3(1e-7));
+    return t_view * rho * vec3(d.tp) / den;
+}
+
 // The material as the models read it. Under MODE_GENERIC every fact comes from the material
 // buffer at run time; a per-material pipeline (SPECIALIZED) has the layer count and each
 // layer's structure as constants (shared/variant.glsl), so that with the loops unrolled
@@ -165,7 +208,7 @@ void tm_surface_begin(vec2 uv, vec2 frag_coord) {
 // Layer `index` of the material with its varying fields read at the point.
 LayerGpu tm_surface_layer(uint index) {
     LayerGpu layer = material.layers[index];
-    uvec2 codes = material.maps[index].xy;
+    uvec2 codes = material.maps[index].xy;  // .z: the diffuse albedo's map, below
     if (codes.x != 0u) {
         uint c = codes.x & 0xffu;
         if (c != 0u) layer.ior.rgb = tm_map(c).rgb;
@@ -184,6 +227,8 @@ LayerGpu tm_surface_layer(uint index) {
         c = (codes.y >> 16) & 0xffu;
         if (c != 0u) layer.params.z = tm_map(c).r;
     }
+    uint c = material.maps[index].z & 0xffu;
+    if (c != 0u) layer.diffuse.rgb = tm_map(c).rgb;
     return layer;
 }
 #endif

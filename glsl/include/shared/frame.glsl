@@ -9,6 +9,8 @@ struct FrameConstants {
     vec4 camera_pos;     // xyz: world-space eye
     vec4 params;         // x: mip count of the prefiltered environment; y: the environment's
                          // scale (0: lights only); z, w: unused
+    vec4 irradiance[9];  // rgb: the environment's irradiance in order-2 spherical harmonics,
+                         // each coefficient times its band's cosine-lobe factor (lib/ibl.glsl)
 };
 
 #endif

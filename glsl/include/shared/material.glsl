@@ -11,6 +11,8 @@ struct LayerGpu {
     vec4 sigma_s;  // rgb: scattering coefficient of the medium (6-flux)
     vec4 sigma_a;  // rgb: absorption coefficient of the medium (6-flux)
     vec4 params;   // x: GGX α of the top interface, y: medium depth, z: HG g, w: unused
+    vec4 diffuse;  // w = 1: a Lambertian base of albedo rgb, which ends the stack
+                   // (src/model/diffuse.rs); w = 0 for every other layer
 };
 
 struct MaterialGpu {

@@ -1,0 +1,109 @@
+//! The diffuse base on the GPU (`model::diffuse`): its lobe as the f64 oracle gives it, with the
+//! variant's own tables (GPU evaluator against `VariantOracle`), and the white furnace of a
+//! white base under lossless coats, which returns at most — and, lossless, all of — the light.
+
+mod common;
+
+use lamina::model::LayerParams;
+use lamina::oracle::VariantOracle;
+use lamina::render::eval::GpuEvaluator;
+use lamina::render::furnace;
+use lamina::variant::VariantKey;
+
+fn coat(ior: f64, roughness: f64) -> LayerParams {
+    LayerParams {
+        ior: [ior; 3],
+        kappa: [0.0; 3],
+        roughness,
+        depth: 0.0,
+        sigma_s: [0.0; 3],
+        sigma_a: [0.0; 3],
+        g: 0.0,
+        diffuse: None,
+    }
+}
+
+fn base(rho: [f64; 3]) -> LayerParams {
+    LayerParams {
+        roughness: 1.0,
+        diffuse: Some(rho),
+        ..coat(1.0, 0.0)
+    }
+}
+
+fn stacks() -> Vec<Vec<LayerParams>> {
+    vec![
+        vec![base([0.7, 0.3, 0.1])],
+        vec![coat(1.5, 0.0), base([0.62, 0.16, 0.10])],
+        vec![coat(1.5, 0.05), coat(1.3, 0.3), base([0.9, 0.9, 0.2])],
+        vec![
+            LayerParams {
+                depth: 0.8,
+                sigma_s: [1.5, 1.0, 0.5],
+                sigma_a: [0.1, 0.2, 0.4],
+                g: 0.3,
+                ..coat(1.6, 0.2)
+            },
+            base([0.5, 0.6, 0.7]),
+        ],
+    ]
+}
+
+#[test]
+fn the_gpu_diffuse_lobe_is_the_oracles() {
+    let gpu = common::gpu();
+    let cosines = [1e-3, 0.05, 0.3, 0.7, 1.0];
+    let mut worst = 0.0f64;
+    for key in ["model=tm2,max_layers=4", "model=tm6,max_layers=4"] {
+        let variant: VariantKey = key.parse().unwrap();
+        let oracle = VariantOracle::new(&gpu, variant).unwrap();
+        let evaluator = GpuEvaluator::new(&gpu, variant).unwrap();
+        for stack in stacks() {
+            let want = oracle.evaluate(&stack, &cosines).unwrap();
+            let got = evaluator.evaluate(&stack, &cosines).unwrap();
+            for ((w, g), mu) in want.iter().zip(&got).zip(cosines) {
+                let (w_lobe, g_lobe) = (w.lobes.last().unwrap(), g.lobes.last().unwrap());
+                assert!(
+                    w_lobe.diffuse && g_lobe.diffuse,
+                    "{key} μ {mu}: the last lobe is diffuse"
+                );
+                for c in 0..3 {
+                    let d = (w_lobe.weight[c] - g_lobe.weight[c]).abs();
+                    let r = (w.reflectance[c] - g.reflectance[c]).abs();
+                    worst = worst.max(d).max(r);
+                    assert!(
+                        d < 2e-4 && r < 2e-4,
+                        "{key} {stack:?} μ {mu}: lobe {d:.2e}, R {r:.2e}"
+                    );
+                }
+            }
+        }
+    }
+    println!(
+        "diffuse lobe and reflectance, GPU against the oracle: largest difference {worst:.1e}"
+    );
+    common::assert_validation_clean(&gpu);
+}
+
+#[test]
+fn a_white_base_under_lossless_coats_returns_the_white_furnace() {
+    let gpu = common::gpu();
+    let lossless = [
+        vec![base([1.0; 3])],
+        vec![coat(1.5, 0.0), base([1.0; 3])],
+        vec![coat(1.5, 0.2), coat(1.33, 0.5), base([1.0; 3])],
+    ];
+    for key in ["model=tm2,max_layers=4", "model=tm6,max_layers=4"] {
+        for stack in &lossless {
+            let bins = furnace::gpu(&gpu, key.parse().unwrap(), stack, 128, 12).unwrap();
+            let (min, mean, max) = furnace::summary(&bins);
+            println!(
+                "{key}, {} layer(s): furnace min {min:.4} mean {mean:.4} max {max:.4}",
+                stack.len()
+            );
+            assert!(max <= 1.0 + 2e-3, "{key} {stack:?}: energy gain, max {max}");
+            assert!(min >= 0.98, "{key} {stack:?}: energy lost, min {min}");
+        }
+    }
+    common::assert_validation_clean(&gpu);
+}
