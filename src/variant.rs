@@ -290,6 +290,11 @@ pub struct ShadeSpec {
     /// maps and each pixel's covered layers. A property of the material, not an axis: a
     /// generic pass is built per (variant, varying or not).
     pub surface_maps: u32,
+    /// 1: the stack may end in a diffuse base (`model::diffuse`). Its lobe's code folds away
+    /// where this is 0: lavapipe runs both sides of every branch, and a stack without a
+    /// diffuse base must not pay for one. Set per material for the forward pass, always for
+    /// the GPU evaluator.
+    pub diffuse_base: u32,
     /// `specialized-values`: the layers' values (see [`LAYER_VALUES`]).
     pub values: [[f32; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
 }
@@ -300,7 +305,7 @@ impl Default for ShadeSpec {
     }
 }
 
-const AXIS_ENTRIES: usize = 19;
+const AXIS_ENTRIES: usize = 20;
 const VALUE_ENTRIES: usize = (MAX_LAYERS_LIMIT * VALUES_PER_LAYER) as usize;
 
 const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENTRIES] {
@@ -309,7 +314,7 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
         offset: 0,
         size: 4,
     }; AXIS_ENTRIES + VALUE_ENTRIES];
-    // ids 0…18 are the u32 fields in declaration order, 4 bytes apart from offset 0.
+    // ids 0…19 are the u32 fields in declaration order, 4 bytes apart from offset 0.
     let mut i = 0;
     while i < AXIS_ENTRIES {
         out[i].id = i as u32;
@@ -325,7 +330,7 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
     out
 }
 
-const _: () = assert!(std::mem::offset_of!(ShadeSpec, surface_maps) == 4 * (AXIS_ENTRIES - 1));
+const _: () = assert!(std::mem::offset_of!(ShadeSpec, diffuse_base) == 4 * (AXIS_ENTRIES - 1));
 
 impl crate::vk::SpecConstants for ShadeSpec {
     const ENTRIES: &'static [crate::vk::SpecEntry] = &shade_spec_entries();
@@ -353,6 +358,7 @@ impl VariantKey {
             retro_mask: 0,
             baked_size: 0,
             surface_maps: 0,
+            diffuse_base: 0,
             values: [[0.0; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
         }
     }
@@ -555,6 +561,10 @@ mod tests {
         assert_eq!(
             entries[18].offset,
             std::mem::offset_of!(ShadeSpec, surface_maps)
+        );
+        assert_eq!(
+            entries[19].offset,
+            std::mem::offset_of!(ShadeSpec, diffuse_base)
         );
         let last = entries.last().unwrap();
         assert_eq!(last.id, VALUE_ID_BASE + VALUE_ENTRIES as u32 - 1);

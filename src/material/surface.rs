@@ -271,6 +271,9 @@ impl std::fmt::Debug for SurfaceMaps {
     }
 }
 
+/// The bit of [`SurfaceMaps::spec_bits`] that says a stack varies at all.
+pub const SURFACE_ON: u32 = 1 << 31;
+
 /// Bit of a field's code byte marking screen coordinates.
 pub const SCREEN_BIT: u32 = 0x80;
 
@@ -381,6 +384,25 @@ impl SurfaceMaps {
             out.push(layer);
         }
         out
+    }
+
+    /// The forward pass's `SURFACE_MAPS` constant for these maps: [`SURFACE_ON`], and bit
+    /// 4·word + byte for each field some layer reads from a map (bits 0–3: η, κ, σs, σa; 4–7:
+    /// α, depth, g, coverage; 8: the diffuse albedo). The shader reads only those fields'
+    /// maps: lavapipe runs both sides of a branch, so a lookup the stack never needs would
+    /// still cost every pixel its texture fetch.
+    pub fn spec_bits(&self) -> u32 {
+        let mut bits = SURFACE_ON;
+        for code in &self.codes {
+            for (word, value) in code.iter().enumerate() {
+                for byte in 0..4 {
+                    if (value >> (8 * byte)) & 0xff != 0 {
+                        bits |= 1 << (4 * word + byte);
+                    }
+                }
+            }
+        }
+        bits
     }
 
     /// The fraction of the map's texels holding layer `layer` (1 without a coverage map).

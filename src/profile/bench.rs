@@ -17,6 +17,7 @@ use crate::model::LayerParams;
 use crate::render::forward::ForwardPass;
 use crate::render::lights::Lighting;
 use crate::render::scene::Scene;
+use crate::render::surface::spec_bits;
 use crate::render::Renderer;
 use crate::tables::environment::EnvDesc;
 use crate::variant::{Model, VariantKey};
@@ -266,7 +267,7 @@ pub fn run(
     let mut pass_of = Vec::with_capacity(cases.len());
     for (case, stack) in cases.iter().zip(&layers) {
         let surface = case.stack.surface.as_ref();
-        let shades = |p: &ForwardPass| p.shades(case.variant, stack, surface.is_some());
+        let shades = |p: &ForwardPass| p.shades(case.variant, stack, spec_bits(surface));
         let index = match passes.iter().position(shades) {
             Some(i) => i,
             None => {

@@ -29,6 +29,7 @@ use crate::material::Stack;
 use crate::render::forward::ForwardPass;
 use crate::render::lights::Lighting;
 use crate::render::scene::{Camera, Scene};
+use crate::render::surface::spec_bits;
 use crate::render::{Renderer, ShadedPhase};
 use crate::size::Size;
 use crate::tables::environment::EnvDesc;
@@ -144,7 +145,7 @@ pub fn worker(
         let surface = case.stack.surface.as_ref();
         if !passes
             .iter()
-            .any(|p| p.shades(case.variant, &layers, surface.is_some()))
+            .any(|p| p.shades(case.variant, &layers, spec_bits(surface)))
         {
             renderer.set_surface(surface)?;
             passes.push(renderer.prepare(case.variant, &layers)?);
@@ -158,11 +159,13 @@ pub fn worker(
             let surface = case.stack.surface.as_ref();
             let pass = passes
                 .iter()
-                .find(|p| p.shades(case.variant, &layers, surface.is_some()))
+                .find(|p| p.shades(case.variant, &layers, spec_bits(surface)))
                 .expect("prepared above");
             renderer.set_surface(surface)?;
-            // llvmpipe compiles a fragment-shader variant at its first draw: keep that out.
-            renderer.render(pass, &layers, width, height)?;
+            // llvmpipe compiles a fragment-shader variant at its first draw with a state (the
+            // pipeline, the bound textures' formats and sizes): keep that out with a draw of
+            // the same state, as small as any — its size is not part of the variant.
+            renderer.render(pass, &layers, WARM_UP_SIDE, WARM_UP_SIDE)?;
             renderer.render_observed(pass, &layers, width, height, &mut |phase| match phase {
                 ShadedPhase::Before => callgrind::start_instrumentation(),
                 ShadedPhase::After => callgrind::stop_instrumentation(),
@@ -174,6 +177,9 @@ pub fn worker(
     }
     Ok(())
 }
+
+/// The side of the draw before each counted one (`worker`).
+const WARM_UP_SIDE: u32 = 8;
 
 /// How a run starts `lamina count-worker` under callgrind: which executable, with which global
 /// arguments, on which environment map.

@@ -127,7 +127,12 @@ impl<'g> GpuEvaluator<'g> {
         let kernel = if variant.mode.per_material() {
             None
         } else {
-            Some(Self::kernel(gpu, &inputs, variant, variant.spec())?)
+            // The evaluator takes any stack: a diffuse base's code stays in.
+            let spec = ShadeSpec {
+                diffuse_base: 1,
+                ..variant.spec()
+            };
+            Some(Self::kernel(gpu, &inputs, variant, spec)?)
         };
         Ok(Self {
             gpu,

@@ -29,8 +29,11 @@ pub struct ForwardPass {
     pub spirv_bytes: usize,
     /// `None` under `mode=generic`.
     pub material: Option<PassMaterial>,
-    /// Built for a spatially varying stack (`ShadeSpec::surface_maps`).
-    pub surface: bool,
+    /// The `SURFACE_MAPS` it was built with: 0 for uniform stacks, else the varying fields
+    /// (`SurfaceMaps::spec_bits`).
+    pub surface: u32,
+    /// Built for a stack that ends in a diffuse base (`ShadeSpec::diffuse_base`).
+    pub diffuse: bool,
 }
 
 impl ForwardPass {
@@ -69,19 +72,30 @@ impl ForwardPass {
             pipeline,
             spirv_bytes: fragment.len() * 4,
             material,
-            surface: spec.surface_maps != 0,
+            surface: spec.surface_maps,
+            diffuse: spec.diffuse_base != 0,
         })
     }
 
-    /// Whether this pass is `variant`'s and shades `layers`, varying over the surface or
-    /// not (`surface`).
-    pub fn shades(&self, variant: VariantKey, layers: &[LayerParams], surface: bool) -> bool {
+    /// Whether this pass is `variant`'s and shades `layers` with maps of `surface` (the
+    /// stack's `render::surface::spec_bits`).
+    pub fn shades(&self, variant: VariantKey, layers: &[LayerParams], surface: u32) -> bool {
         self.variant == variant && self.surface == surface && self.check_material(layers).is_ok()
     }
 
     /// Whether this pass shades `layers` as its variant says: any stack that fits a generic
     /// pass, the same structure under `specialized`, the same stack under the other modes.
     pub fn check_material(&self, layers: &[LayerParams]) -> Result<()> {
+        if super::renderer::ends_diffuse(layers) != self.diffuse {
+            let kind = |d: bool| if d { "ends in" } else { "has no" };
+            return Err(Error::Unsupported(format!(
+                "this pass ({}) was built for a stack that {} diffuse base and this one {} one; \
+                 prepare a pass for this stack",
+                self.variant,
+                kind(self.diffuse),
+                kind(!self.diffuse)
+            )));
+        }
         let Some(own) = &self.material else {
             return check_generic_fit(self.variant, layers);
         };

@@ -33,6 +33,12 @@ use super::surface::SurfaceTexture;
 use crate::material::Surface;
 use std::sync::Arc;
 
+/// Whether a stack ends in a diffuse base: its generic pass keeps that lobe's code
+/// (`ShadeSpec::diffuse_base`).
+pub fn ends_diffuse(layers: &[LayerParams]) -> bool {
+    layers.last().is_some_and(LayerParams::is_diffuse)
+}
+
 /// The render target's format: linear HDR RGBA.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum TargetFormat {
@@ -244,7 +250,10 @@ impl<'g> Renderer<'g> {
         }
         if !variant.mode.per_material() {
             let mut spec = shade_spec(variant, layers, None).map_err(specialize)?;
-            spec.surface_maps = u32::from(self.current_surface.is_some());
+            spec.surface_maps = self
+                .surface_texture()
+                .map_or(0, |t| t.surface.maps.spec_bits());
+            spec.diffuse_base = u32::from(ends_diffuse(layers));
             let format = self.target.format();
             let pass = ForwardPass::new(self.gpu, &self.layout, format, variant, &spec, None)?;
             return Ok(pass);
@@ -296,15 +305,25 @@ impl<'g> Renderer<'g> {
         observe: &mut dyn FnMut(ShadedPhase),
     ) -> Result<RenderedFrame> {
         pass.check_material(layers)?;
-        match (self.surface_texture(), pass.surface) {
-            (Some(s), true) if s.surface.layers.len() == layers.len() => {}
+        let bits = self
+            .surface_texture()
+            .map_or(0, |t| t.surface.maps.spec_bits());
+        match (self.surface_texture(), pass.surface != 0) {
+            (Some(s), true) if s.surface.layers.len() == layers.len() && bits == pass.surface => {}
             (None, false) => {}
-            (Some(s), true) => {
+            (Some(s), true) if s.surface.layers.len() != layers.len() => {
                 return Err(Error::Unsupported(format!(
                     "the surface's maps are for {} layers; this stack has {}",
                     s.surface.layers.len(),
                     layers.len()
                 )))
+            }
+            (Some(_), true) => {
+                return Err(Error::Unsupported(
+                    "this pass was prepared for a stack whose maps vary other fields; prepare \
+                     one for this stack"
+                        .into(),
+                ))
             }
             (_, built_for_maps) => {
                 let kind = |maps: bool| if maps { "a varying" } else { "a uniform" };

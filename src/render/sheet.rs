@@ -165,7 +165,8 @@ pub fn render(
                 label_tile(&font, &mut sheet, width, (x0, y0), t, &label);
                 continue;
             }
-            if !pass.shades(variant, &row.layers, varies) {
+            let surface = super::surface::spec_bits(row.surface.as_ref());
+            if !pass.shades(variant, &row.layers, surface) {
                 *pass = renderer.prepare(variant, &row.layers)?;
             }
             let frame = renderer.render(pass, &row.layers, tile, tile)?;

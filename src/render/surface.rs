@@ -8,6 +8,11 @@ use crate::gpu::Gpu;
 use crate::material::Surface;
 use crate::vk::{upload_image, Format, Image, ImageDesc, ImageState, ImageView};
 
+/// The `SURFACE_MAPS` constant of a pass for a stack with `surface` (0: uniform).
+pub fn spec_bits(surface: Option<&Arc<Surface>>) -> u32 {
+    surface.map_or(0, |s| s.maps.spec_bits())
+}
+
 pub struct SurfaceTexture {
     /// What was uploaded: a later [`SurfaceTexture::holds`] with the same `Arc` reuses it.
     pub surface: Arc<Surface>,

@@ -129,7 +129,8 @@ fn step(
     let compiled = match pass.as_ref() {
         Some(p) => {
             p.variant != request.variant
-                || p.surface != request.surface.is_some()
+                || p.surface != crate::render::surface::spec_bits(request.surface.as_ref())
+                || p.diffuse != crate::render::renderer::ends_diffuse(&request.layers)
                 || (p.material.is_some() && p.check_material(&request.layers).is_err())
         }
         None => true,

@@ -18,8 +18,7 @@ struct Tm2Factors {
     real3 r, t, rp, tp;
     float gr, gt, grp, gtp;
     bool conductor;
-    bool diffuse;     // a Lambertian base of albedo `rho` (src/model/diffuse.rs)
-    vec3 rho;
+    bool diffuse;     // a Lambertian base (src/model/diffuse.rs; its albedo is read where used)
     bool skip;        // η_ij ≈ 1: no interface (ENoComponent)
     float mu;         // |cos| of the mean incident direction on the component
     float mu_t;       // |cos| of the mean refracted direction below it
@@ -37,8 +36,7 @@ Tm2Factors tm2_factor(uint i, inout float eta_above, inout float cos_i) {
     c.gr = hg_g_of_alpha(c.alpha);
     c.grp = c.gr;
     c.conductor = tm_conductor_at(i, layer);
-    c.diffuse = !SPECIALIZED && tm_is_diffuse(layer);
-    c.rho = layer.diffuse.rgb;
+    c.diffuse = DIFFUSE_BASE != 0u && !SPECIALIZED && tm_is_diffuse(layer);
     c.skip = false;
     c.eta = 1.0;
     c.mu_t = cos_i;
@@ -107,7 +105,7 @@ void tm2_factors(float mu, inout Tm2Factors comps[MAX_LAYERS], out uint count) {
     count = tm_layer_count();
     for (uint i = 0u; i < count; ++i) {
         comps[i] = tm2_factor(i, eta_above, cos_i);
-        if (comps[i].conductor || comps[i].diffuse) {
+        if (comps[i].conductor || (DIFFUSE_BASE != 0u && comps[i].diffuse)) {
             count = i + 1u;
             return;
         }
@@ -130,9 +128,12 @@ void tm2_add(uint i, Tm2Factors c, float g_next, inout Tm2State s, inout vec3 tr
     real3 r_total;
     real g_total;
     float g_t0j = s.g_t0i;
-    if (c.diffuse) {
+    // The constant first: `c` comes from an array, which hides that `diffuse` is false when
+    // no diffuse base can occur, and lavapipe would run the branch masked at every layer.
+    if (DIFFUSE_BASE != 0u && c.diffuse) {
         // A Lambertian base under the layers above: one diffuse lobe, nothing transmitted.
-        vec3 weight = tm_diffuse_weight(vec3(s.e.t), c.rho, tm_diffuse_slab(i, false));
+        vec3 rho = tm_layer(i).diffuse.rgb;
+        vec3 weight = tm_diffuse_weight(vec3(s.e.t), rho, tm_diffuse_slab(i, false));
         tm_emit_lobe(weight, 1.0, LOBE_DIFFUSE);
         s.r_prev += real3(weight);
         transmittance = vec3(0.0);

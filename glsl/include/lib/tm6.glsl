@@ -324,7 +324,7 @@ bool tm6_step(uint step, uint layers, inout Tm6Walk w, inout vec3 transmittance)
     bool substrate = false;
     vec3 up[3] = w.e.up;
     vec3 up_g[3] = w.g.up;
-    if ((step & 1u) == 0u && !SPECIALIZED && tm_is_diffuse(layer)) {
+    if ((step & 1u) == 0u && DIFFUSE_BASE != 0u && !SPECIALIZED && tm_is_diffuse(layer)) {
         // A Lambertian base under the layers above: every flux class reaching it feeds one
         // diffuse lobe, which ends the walk.
         vec3 t_view = vec3(w.e.down[0] + w.e.down[1] + w.e.down[2]);

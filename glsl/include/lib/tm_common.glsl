@@ -172,6 +172,12 @@ uint tm_surface_slots[MAX_LAYERS];
 
 const uint TM_SCREEN_BIT = 0x80u;
 
+// Whether some layer reads field `bit` from a map (src/material/surface.rs's spec_bits): a
+// constant, so the lookups of fields that never vary fold away.
+bool tm_varies(uint bit) {
+    return (SURFACE_MAPS & (1u << bit)) != 0u;
+}
+
 // The texel of map `code` holding the point: the pixel's in screen coordinates, else the
 // nearest to its texture coordinates (repeated).
 ivec3 tm_map_texel(uint code) {
@@ -196,7 +202,7 @@ void tm_surface_begin(vec2 uv, vec2 frag_coord) {
     uint count = min(material.info.x, MAX_LAYERS);
     uint n = 0u;
     for (uint i = 0u; i < count; ++i) {
-        uint coverage = material.maps[i].y >> 24;
+        uint coverage = tm_varies(7u) ? material.maps[i].y >> 24 : 0u;
         if (coverage == 0u || texelFetch(layer_maps, tm_map_texel(coverage), 0).r > 0.5) {
             tm_surface_slots[n] = i;
             ++n;
@@ -208,27 +214,23 @@ void tm_surface_begin(vec2 uv, vec2 frag_coord) {
 // Layer `index` of the material with its varying fields read at the point.
 LayerGpu tm_surface_layer(uint index) {
     LayerGpu layer = material.layers[index];
-    uvec2 codes = material.maps[index].xy;  // .z: the diffuse albedo's map, below
-    if (codes.x != 0u) {
-        uint c = codes.x & 0xffu;
-        if (c != 0u) layer.ior.rgb = tm_map(c).rgb;
-        c = (codes.x >> 8) & 0xffu;
-        if (c != 0u) layer.kappa.rgb = tm_map(c).rgb;
-        c = (codes.x >> 16) & 0xffu;
-        if (c != 0u) layer.sigma_s.rgb = tm_map(c).rgb;
-        c = codes.x >> 24;
-        if (c != 0u) layer.sigma_a.rgb = tm_map(c).rgb;
-    }
-    if ((codes.y & 0xffffffu) != 0u) {
-        uint c = codes.y & 0xffu;
-        if (c != 0u) layer.params.x = tm_map(c).r;
-        c = (codes.y >> 8) & 0xffu;
-        if (c != 0u) layer.params.y = tm_map(c).r;
-        c = (codes.y >> 16) & 0xffu;
-        if (c != 0u) layer.params.z = tm_map(c).r;
-    }
-    uint c = material.maps[index].z & 0xffu;
-    if (c != 0u) layer.diffuse.rgb = tm_map(c).rgb;
+    uvec3 codes = material.maps[index].xyz;
+    uint c = codes.x & 0xffu;
+    if (tm_varies(0u) && c != 0u) layer.ior.rgb = tm_map(c).rgb;
+    c = (codes.x >> 8) & 0xffu;
+    if (tm_varies(1u) && c != 0u) layer.kappa.rgb = tm_map(c).rgb;
+    c = (codes.x >> 16) & 0xffu;
+    if (tm_varies(2u) && c != 0u) layer.sigma_s.rgb = tm_map(c).rgb;
+    c = codes.x >> 24;
+    if (tm_varies(3u) && c != 0u) layer.sigma_a.rgb = tm_map(c).rgb;
+    c = codes.y & 0xffu;
+    if (tm_varies(4u) && c != 0u) layer.params.x = tm_map(c).r;
+    c = (codes.y >> 8) & 0xffu;
+    if (tm_varies(5u) && c != 0u) layer.params.y = tm_map(c).r;
+    c = (codes.y >> 16) & 0xffu;
+    if (tm_varies(6u) && c != 0u) layer.params.z = tm_map(c).r;
+    c = codes.z & 0xffu;
+    if (tm_varies(8u) && c != 0u) layer.diffuse.rgb = tm_map(c).rgb;
     return layer;
 }
 #endif

@@ -31,9 +31,12 @@ layout(constant_id = 14) const uint CLEAR_MASK = 0;      // refracts, reflects n
 layout(constant_id = 15) const uint LOBE_COUNT = 0;
 layout(constant_id = 16) const uint RETRO_MASK = 0;
 layout(constant_id = 17) const uint BAKED_SIZE = 0;
-// 1: the stack varies over the surface (maps, coverage; generic mode only): the forward pass
-// reads each pixel's layers through lib/tm_common.glsl's surface lookups.
+// Non-zero: the stack varies over the surface (maps, coverage; generic mode only), and bit k
+// says which field some layer reads from a map (src/material/surface.rs's spec_bits): the
+// forward pass reads each pixel's layers through lib/tm_common.glsl's surface lookups.
 layout(constant_id = 18) const uint SURFACE_MAPS = 0;
+// 1: the stack may end in a diffuse base (src/model/diffuse.rs); 0 folds its code away.
+layout(constant_id = 19) const uint DIFFUSE_BASE = 0;
 
 // The codes of every axis value (MODEL_TM2, TIR_LUT32, FGD_RESAMPLED4D, G2_EARL, …), written
 // from the Rust value tables by src/shader/compiler.rs.
