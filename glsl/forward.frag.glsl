@@ -55,7 +55,9 @@ vec3 light_at(uint j, out vec3 l) {
 // What the analytic lights send back through a lobe of unit weight and roughness α.
 vec3 lobe_lights(float alpha, bool retro) {
     vec3 sum = vec3(0.0);
-    uint count = light_info.x;
+    // LIGHTS = 0: a scene without lights compiles none of this (lavapipe compiles and runs
+    // every path a constant does not remove).
+    uint count = LIGHTS != 0u ? light_info.x : 0u;
     for (uint j = 0u; j < count; ++j) {
         vec3 l;
         vec3 irradiance = light_at(j, l);
@@ -70,7 +72,7 @@ vec3 lobe_lights(float alpha, bool retro) {
 // (its order-2 spherical harmonics, tables::environment::irradiance_sh).
 vec3 diffuse_light() {
     vec3 sum = vec3(0.0);
-    uint count = light_info.x;
+    uint count = LIGHTS != 0u ? light_info.x : 0u;
     for (uint j = 0u; j < count; ++j) {
         vec3 l;
         vec3 irradiance = light_at(j, l);

@@ -295,6 +295,9 @@ pub struct ShadeSpec {
     /// diffuse base must not pay for one. Set per material for the forward pass, always for
     /// the GPU evaluator.
     pub diffuse_base: u32,
+    /// 1: the scene has analytic lights (`render::lights`): the forward pass loops over them.
+    /// 0 removes the loops, which lavapipe would otherwise compile into every pass.
+    pub lights: u32,
     /// `specialized-values`: the layers' values (see [`LAYER_VALUES`]).
     pub values: [[f32; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
 }
@@ -305,7 +308,7 @@ impl Default for ShadeSpec {
     }
 }
 
-const AXIS_ENTRIES: usize = 20;
+const AXIS_ENTRIES: usize = 21;
 const VALUE_ENTRIES: usize = (MAX_LAYERS_LIMIT * VALUES_PER_LAYER) as usize;
 
 const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENTRIES] {
@@ -314,7 +317,7 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
         offset: 0,
         size: 4,
     }; AXIS_ENTRIES + VALUE_ENTRIES];
-    // ids 0…19 are the u32 fields in declaration order, 4 bytes apart from offset 0.
+    // ids 0…20 are the u32 fields in declaration order, 4 bytes apart from offset 0.
     let mut i = 0;
     while i < AXIS_ENTRIES {
         out[i].id = i as u32;
@@ -330,7 +333,7 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
     out
 }
 
-const _: () = assert!(std::mem::offset_of!(ShadeSpec, diffuse_base) == 4 * (AXIS_ENTRIES - 1));
+const _: () = assert!(std::mem::offset_of!(ShadeSpec, lights) == 4 * (AXIS_ENTRIES - 1));
 
 impl crate::vk::SpecConstants for ShadeSpec {
     const ENTRIES: &'static [crate::vk::SpecEntry] = &shade_spec_entries();
@@ -359,6 +362,7 @@ impl VariantKey {
             baked_size: 0,
             surface_maps: 0,
             diffuse_base: 0,
+            lights: 0,
             values: [[0.0; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
         }
     }
@@ -566,6 +570,7 @@ mod tests {
             entries[19].offset,
             std::mem::offset_of!(ShadeSpec, diffuse_base)
         );
+        assert_eq!(entries[20].offset, std::mem::offset_of!(ShadeSpec, lights));
         let last = entries.last().unwrap();
         assert_eq!(last.id, VALUE_ID_BASE + VALUE_ENTRIES as u32 - 1);
         assert_eq!(last.offset + last.size, std::mem::size_of::<ShadeSpec>());

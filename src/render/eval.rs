@@ -93,6 +93,10 @@ pub struct GpuEvaluator<'g> {
     /// Set 1: the view cosines in, the results out. `None` under a per-material mode, whose
     /// kernel is built for each stack evaluated.
     kernel: Option<ComputeKernel>,
+    /// The generic kernel with a diffuse base's code (`ShadeSpec::diffuse_base`), built the
+    /// first time a stack ends in one: lavapipe runs that code masked for every stack it is
+    /// compiled into.
+    diffuse_kernel: std::cell::OnceCell<ComputeKernel>,
 }
 
 /// One evaluation on the GPU and which of its lobes are lit around the view (bit k: lobe k
@@ -127,18 +131,14 @@ impl<'g> GpuEvaluator<'g> {
         let kernel = if variant.mode.per_material() {
             None
         } else {
-            // The evaluator takes any stack: a diffuse base's code stays in.
-            let spec = ShadeSpec {
-                diffuse_base: 1,
-                ..variant.spec()
-            };
-            Some(Self::kernel(gpu, &inputs, variant, spec)?)
+            Some(Self::kernel(gpu, &inputs, variant, variant.spec())?)
         };
         Ok(Self {
             gpu,
             variant,
             inputs,
             kernel,
+            diffuse_kernel: std::cell::OnceCell::new(),
         })
     }
 
@@ -230,7 +230,19 @@ impl<'g> GpuEvaluator<'g> {
         let kernel = match &self.kernel {
             Some(kernel) => {
                 check_generic_fit(self.variant, layers)?;
-                kernel
+                if crate::render::renderer::ends_diffuse(layers) {
+                    if self.diffuse_kernel.get().is_none() {
+                        let spec = ShadeSpec {
+                            diffuse_base: 1,
+                            ..self.variant.spec()
+                        };
+                        let built = Self::kernel(self.gpu, &self.inputs, self.variant, spec)?;
+                        let _ = self.diffuse_kernel.set(built);
+                    }
+                    self.diffuse_kernel.get().expect("set above")
+                } else {
+                    kernel
+                }
             }
             None => {
                 let spec = shade_spec(self.variant, layers, None)

@@ -34,6 +34,8 @@ pub struct ForwardPass {
     pub surface: u32,
     /// Built for a stack that ends in a diffuse base (`ShadeSpec::diffuse_base`).
     pub diffuse: bool,
+    /// Built for a scene with analytic lights (`ShadeSpec::lights`).
+    pub lights: bool,
 }
 
 impl ForwardPass {
@@ -74,6 +76,7 @@ impl ForwardPass {
             material,
             surface: spec.surface_maps,
             diffuse: spec.diffuse_base != 0,
+            lights: spec.lights != 0,
         })
     }
 

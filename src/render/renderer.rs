@@ -254,6 +254,7 @@ impl<'g> Renderer<'g> {
                 .surface_texture()
                 .map_or(0, |t| t.surface.maps.spec_bits());
             spec.diffuse_base = u32::from(ends_diffuse(layers));
+            spec.lights = u32::from(!self.lighting.lights.is_empty());
             let format = self.target.format();
             let pass = ForwardPass::new(self.gpu, &self.layout, format, variant, &spec, None)?;
             return Ok(pass);
@@ -266,8 +267,9 @@ impl<'g> Renderer<'g> {
         } else {
             None
         };
-        let spec = shade_spec(variant, layers, baked.as_ref().map(|(t, _)| t.shape))
+        let mut spec = shade_spec(variant, layers, baked.as_ref().map(|(t, _)| t.shape))
             .map_err(specialize)?;
+        spec.lights = u32::from(!self.lighting.lights.is_empty());
         ForwardPass::new(
             self.gpu,
             &self.layout,

@@ -126,11 +126,14 @@ fn step(
     // A per-material pass is rebuilt when the edit changes what it was built for: the
     // structure under `specialized`, any value under `specialized-values` and `baked`.
     renderer.set_surface(request.surface.as_ref())?;
+    // Before any pass is prepared: a pass is built with or without the light loops.
+    renderer.lighting = request.lighting.clone();
     let compiled = match pass.as_ref() {
         Some(p) => {
             p.variant != request.variant
                 || p.surface != crate::render::surface::spec_bits(request.surface.as_ref())
                 || p.diffuse != crate::render::renderer::ends_diffuse(&request.layers)
+                || p.lights == request.lighting.lights.is_empty()
                 || (p.material.is_some() && p.check_material(&request.layers).is_err())
         }
         None => true,
@@ -152,7 +155,6 @@ fn step(
         return Ok(None);
     }
     renderer.camera = request.camera;
-    renderer.lighting = request.lighting.clone();
     if compiled {
         // llvmpipe compiles the shader at its first draw: keep that out of the history.
         renderer.render(pass, &request.layers, request.width, request.height)?;

@@ -37,6 +37,8 @@ layout(constant_id = 17) const uint BAKED_SIZE = 0;
 layout(constant_id = 18) const uint SURFACE_MAPS = 0;
 // 1: the stack may end in a diffuse base (src/model/diffuse.rs); 0 folds its code away.
 layout(constant_id = 19) const uint DIFFUSE_BASE = 0;
+// 1: the scene has analytic lights (render::lights); 0 folds the light loops away.
+layout(constant_id = 20) const uint LIGHTS = 0;
 
 // The codes of every axis value (MODEL_TM2, TIR_LUT32, FGD_RESAMPLED4D, G2_EARL, …), written
 // from the Rust value tables by src/shader/compiler.rs.
