@@ -144,9 +144,19 @@ fn every_tir_and_fgd_value_renders_every_preset_finite() {
             let variant: VariantKey = format!("model={model},{axis},max_layers=5")
                 .parse()
                 .unwrap();
-            let pass = renderer.prepare(variant, &[]).unwrap();
+            // One pass for the stacks that end in a diffuse base, one for the others
+            // (`ShadeSpec::diffuse_base`).
+            let ceramic = Stack::resolve("glazed-ceramic").unwrap().params();
+            let plain = renderer.prepare(variant, &[]).unwrap();
+            let diffuse = renderer.prepare(variant, &ceramic).unwrap();
             for stack in &stacks {
-                let frame = renderer.render(&pass, &stack.params(), 40, 40).unwrap();
+                let layers = stack.params();
+                let pass = if diffuse.check_material(&layers).is_ok() {
+                    &diffuse
+                } else {
+                    &plain
+                };
+                let frame = renderer.render(pass, &layers, 40, 40).unwrap();
                 assert!(
                     frame.pixels.iter().all(|p| p.iter().all(|c| c.is_finite())),
                     "{variant} on {}: a non-finite pixel",
