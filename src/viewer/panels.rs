@@ -206,6 +206,7 @@ impl Panels {
                         .default_open(true)
                         .show(ui, |ui| self.variant(ui));
                     ui.collapsing("Scene", |ui| self.scene(ui));
+                    ui.collapsing("Lights", |ui| self.lights(ui));
                     egui::CollapsingHeader::new("Layer stack")
                         .default_open(true)
                         .show(ui, |ui| self.layers(ui));
@@ -223,7 +224,10 @@ impl Panels {
                 let response = ui.add(
                     egui::Image::new((texture.id(), size)).sense(egui::Sense::click_and_drag()),
                 );
-                if response.dragged() {
+                if response.dragged_by(egui::PointerButton::Secondary) {
+                    // The right button turns the first directional light.
+                    self.turn_light(response.drag_delta());
+                } else if response.dragged() {
                     let d = response.drag_delta();
                     self.yaw -= d.x * 0.01;
                     self.pitch = (self.pitch + d.y * 0.01).clamp(-1.45, 1.45);
@@ -327,6 +331,122 @@ impl Panels {
         ui.label("drag the image to orbit, scroll to zoom");
     }
 
+    /// Turns the first directional light by a drag of `d` points (azimuth across, elevation
+    /// up and down), adding one from the upper left when there is none.
+    fn turn_light(&mut self, d: egui::Vec2) {
+        use crate::render::lights::{Light, LightKind};
+        let index = match self
+            .lighting
+            .lights
+            .iter()
+            .position(|l| matches!(l.kind, LightKind::Directional { .. }))
+        {
+            Some(i) => i,
+            None if self.lighting.lights.len() < crate::render::lights::MAX_LIGHTS => {
+                self.lighting.lights.push(Light {
+                    kind: LightKind::Directional {
+                        direction: direction_of(-0.6, 0.6),
+                        angular_radius: 0.0,
+                    },
+                    color: [1.0; 3],
+                    intensity: 3.0,
+                });
+                self.lighting.lights.len() - 1
+            }
+            None => return,
+        };
+        if let LightKind::Directional { direction, .. } = &mut self.lighting.lights[index].kind {
+            let (azimuth, elevation) = angles_of(*direction);
+            *direction = direction_of(
+                azimuth + f64::from(d.x) * 0.01,
+                (elevation - f64::from(d.y) * 0.01).clamp(-1.5, 1.5),
+            );
+        }
+    }
+
+    /// The environment's scale and each analytic light: direction (azimuth, elevation) or
+    /// position, colour, intensity, a directional light's angular radius; add and remove.
+    fn lights(&mut self, ui: &mut Ui) {
+        use crate::render::lights::{Light, LightKind, MAX_ANGULAR_RADIUS_DEG, MAX_LIGHTS};
+        ui.add(Slider::new(&mut self.lighting.environment, 0.0..=4.0).text("environment scale"));
+        let mut remove = None;
+        for (i, light) in self.lighting.lights.iter_mut().enumerate() {
+            ui.separator();
+            ui.horizontal(|ui| {
+                let mut rgb = light.color.map(|c| c as f32);
+                egui::color_picker::color_edit_button_rgb(ui, &mut rgb);
+                light.color = rgb.map(f64::from);
+                ui.label(match light.kind {
+                    LightKind::Directional { .. } => format!("light {}: directional", i + 1),
+                    LightKind::Point { .. } => format!("light {}: point", i + 1),
+                });
+                if ui.small_button("remove").clicked() {
+                    remove = Some(i);
+                }
+            });
+            ui.add(
+                Slider::new(&mut light.intensity, 0.0..=50.0)
+                    .logarithmic(true)
+                    .text("intensity"),
+            );
+            match &mut light.kind {
+                LightKind::Directional {
+                    direction,
+                    angular_radius,
+                } => {
+                    let (mut azimuth, mut elevation) = angles_of(*direction);
+                    azimuth = azimuth.to_degrees();
+                    elevation = elevation.to_degrees();
+                    ui.add(Slider::new(&mut azimuth, -180.0..=180.0).text("azimuth °"));
+                    ui.add(Slider::new(&mut elevation, -85.0..=85.0).text("elevation °"));
+                    *direction = direction_of(azimuth.to_radians(), elevation.to_radians());
+                    let mut degrees = angular_radius.to_degrees();
+                    ui.add(
+                        Slider::new(&mut degrees, 0.0..=MAX_ANGULAR_RADIUS_DEG)
+                            .text("angular radius °"),
+                    );
+                    *angular_radius = degrees.to_radians();
+                }
+                LightKind::Point { position } => {
+                    rgb_row(ui, "position", position, -20.0..=20.0, 0.05)
+                }
+            }
+        }
+        if let Some(i) = remove {
+            self.lighting.lights.remove(i);
+        }
+        ui.separator();
+        ui.horizontal(|ui| {
+            let room = self.lighting.lights.len() < MAX_LIGHTS;
+            if ui
+                .add_enabled(room, egui::Button::new("add directional"))
+                .clicked()
+            {
+                self.lighting.lights.push(Light {
+                    kind: LightKind::Directional {
+                        direction: direction_of(-0.6, 0.6),
+                        angular_radius: 0.0,
+                    },
+                    color: [1.0; 3],
+                    intensity: 3.0,
+                });
+            }
+            if ui
+                .add_enabled(room, egui::Button::new("add point"))
+                .clicked()
+            {
+                self.lighting.lights.push(Light {
+                    kind: LightKind::Point {
+                        position: [2.0, 1.5, 2.0],
+                    },
+                    color: [1.0; 3],
+                    intensity: 10.0,
+                });
+            }
+        });
+        ui.label("right-drag the image to turn the first directional light");
+    }
+
     fn layers(&mut self, ui: &mut Ui) {
         ui.horizontal(|ui| {
             let mut chosen = None;
@@ -365,6 +485,21 @@ impl Panels {
         let mut artist = self.artist.clone();
         let mut op = None;
         let tm6 = self.stack.model == Model::Tm6;
+        // The fields each layer reads from a map (textures, patterns, coverage): shown, and
+        // kept through edits; the map's values override the constants edited here.
+        let mapped: Vec<String> = (0..count)
+            .map(|i| {
+                let surface = self.stack.surface.as_ref();
+                let layer = surface.and_then(|s| s.layers.get(i));
+                layer.map_or_else(String::new, |l| {
+                    l.sources
+                        .iter()
+                        .map(|(f, _)| f.key())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                })
+            })
+            .collect();
         for (i, layer) in edit.iter_mut().enumerate() {
             let last = i + 1 == count;
             egui::CollapsingHeader::new(format!("layer {}{}", i + 1, describe(layer)))
@@ -382,6 +517,12 @@ impl Panels {
                             op = Some(LayerOp::Remove(i));
                         }
                     });
+                    if !mapped[i].is_empty() {
+                        ui.label(
+                            RichText::new(format!("from maps (see the file): {}", mapped[i]))
+                                .small(),
+                        );
+                    }
                     layer_editor(ui, layer, &mut artist[i], tm6);
                 });
         }
@@ -499,8 +640,21 @@ impl LayerOp {
     }
 }
 
+/// A unit direction (towards the light) of azimuth φ around +y from +z and elevation θ.
+fn direction_of(azimuth: f64, elevation: f64) -> [f64; 3] {
+    let (s, c) = elevation.sin_cos();
+    [c * azimuth.sin(), s, c * azimuth.cos()]
+}
+
+/// The (azimuth, elevation) of a unit direction, [`direction_of`]'s inverse.
+fn angles_of(d: [f64; 3]) -> (f64, f64) {
+    (d[0].atan2(d[2]), d[1].clamp(-1.0, 1.0).asin())
+}
+
 fn describe(layer: &LayerParams) -> &'static str {
-    if layer.is_conductor() {
+    if layer.is_diffuse() {
+        " (diffuse base)"
+    } else if layer.is_conductor() {
         " (conductor)"
     } else if layer.depth > 0.0 {
         " (dielectric, medium)"
@@ -517,6 +671,16 @@ fn layer_editor(
     artist: &mut Option<([f32; 3], [f32; 3])>,
     tm6: bool,
 ) {
+    if let Some(rho) = &mut layer.diffuse {
+        // A Lambertian base has its albedo and nothing else (model::diffuse).
+        ui.horizontal(|ui| {
+            let mut rgb = rho.map(|c| c as f32);
+            egui::color_picker::color_edit_button_rgb(ui, &mut rgb);
+            *rho = rgb.map(|c| f64::from(c.clamp(0.0, 1.0)));
+            ui.label("albedo");
+        });
+        return;
+    }
     if layer.is_conductor() {
         let mut use_artist = artist.is_some();
         ui.checkbox(&mut use_artist, "artist form (F0, edge tint)");
