@@ -8,6 +8,7 @@ use egui::{Color32, ComboBox, DragValue, RichText, Slider, Ui};
 
 use crate::error::{Error, Result};
 use crate::material::simplify::simplify;
+use crate::material::surface::{Coords, Field, PatternKind, Shape};
 use crate::material::{gulbrandsen, presets, Stack};
 use crate::model::LayerParams;
 use crate::render::scene::Camera;
@@ -500,6 +501,7 @@ impl Panels {
                 })
             })
             .collect();
+        let mut coverage_change = None;
         for (i, layer) in edit.iter_mut().enumerate() {
             let last = i + 1 == count;
             egui::CollapsingHeader::new(format!("layer {}{}", i + 1, describe(layer)))
@@ -524,7 +526,16 @@ impl Panels {
                         );
                     }
                     layer_editor(ui, layer, &mut artist[i], tm6);
+                    let before = coverage_of(&self.stack, i);
+                    let mut after = before;
+                    coverage_editor(ui, i, &mut after);
+                    if after != before {
+                        coverage_change = Some((i, after));
+                    }
                 });
+        }
+        if let Some((i, coverage)) = coverage_change {
+            self.set_coverage(i, coverage);
         }
         if ui.button("add a clear coat on top").clicked() {
             op = Some(LayerOp::AddTop);
@@ -575,6 +586,37 @@ impl Panels {
                 {
                     self.message = None;
                 }
+            }
+            Err(e) => self.message = Some(e.to_string()),
+        }
+    }
+
+    /// Gives layer `i` the coverage `coverage` through the file format (the maps are baked
+    /// again), or says why the format refuses it.
+    fn set_coverage(&mut self, i: usize, coverage: CoverageEdit) {
+        let mut document: toml::Table = match self.stack.to_toml().parse() {
+            Ok(t) => t,
+            Err(e) => {
+                self.message = Some(format!("the stack's text does not parse: {e}"));
+                return;
+            }
+        };
+        let Some(layer) = document
+            .get_mut("layer")
+            .and_then(toml::Value::as_array_mut)
+            .and_then(|layers| layers.get_mut(i))
+            .and_then(toml::Value::as_table_mut)
+        else {
+            return;
+        };
+        match coverage_value(coverage) {
+            Some(value) => layer.insert("coverage".into(), value),
+            None => layer.remove("coverage"),
+        };
+        match Stack::from_toml(&document.to_string(), Path::new("(edited stack)")) {
+            Ok(valid) => {
+                self.stack = valid;
+                self.message = None;
             }
             Err(e) => self.message = Some(e.to_string()),
         }
@@ -636,6 +678,151 @@ impl LayerOp {
                 );
                 artist.insert(0, None);
             }
+        }
+    }
+}
+
+/// A layer's coverage as the viewer edits it (`material::surface`): none, one value, or a
+/// pattern (checker, noise, cells) with its scale, seed, optional threshold and coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum CoverageEdit {
+    None,
+    Constant(f64),
+    Pattern {
+        kind: PatternKind,
+        scale: u32,
+        seed: u32,
+        threshold: Option<f64>,
+        screen: bool,
+    },
+}
+
+/// Layer `i`'s coverage in `stack`, as [`CoverageEdit`]; a texture reads as `None` here (it
+/// is kept unless the editor replaces it).
+fn coverage_of(stack: &Stack, i: usize) -> CoverageEdit {
+    let source = stack
+        .surface
+        .as_ref()
+        .and_then(|s| s.layers.get(i))
+        .and_then(|l| l.source(Field::Coverage));
+    match source.map(|s| (&s.shape, s)) {
+        Some((Shape::Uniform(c), _)) => CoverageEdit::Constant(*c),
+        Some((Shape::Pattern(p), s)) => CoverageEdit::Pattern {
+            kind: p.kind,
+            scale: p.scale,
+            seed: p.seed,
+            threshold: s.threshold,
+            screen: s.coords == Coords::Screen,
+        },
+        _ => CoverageEdit::None,
+    }
+}
+
+/// The TOML value of a coverage; `None` removes it.
+fn coverage_value(coverage: CoverageEdit) -> Option<toml::Value> {
+    match coverage {
+        CoverageEdit::None => None,
+        CoverageEdit::Constant(c) => Some(toml::Value::Float(c)),
+        CoverageEdit::Pattern {
+            kind,
+            scale,
+            seed,
+            threshold,
+            screen,
+        } => {
+            let mut t = toml::Table::new();
+            let name = match kind {
+                PatternKind::Checker => "checker",
+                PatternKind::Noise => "noise",
+                PatternKind::Cells => "cells",
+            };
+            t.insert("pattern".into(), name.into());
+            t.insert("scale".into(), i64::from(scale).into());
+            if kind != PatternKind::Checker {
+                t.insert("seed".into(), i64::from(seed).into());
+            }
+            if let Some(th) = threshold {
+                t.insert("threshold".into(), th.into());
+            }
+            if screen {
+                t.insert("coords".into(), "screen".into());
+            }
+            Some(toml::Value::Table(t))
+        }
+    }
+}
+
+/// The coverage controls of layer `i`.
+fn coverage_editor(ui: &mut Ui, i: usize, coverage: &mut CoverageEdit) {
+    let label = |c: &CoverageEdit| match c {
+        CoverageEdit::None => "none",
+        CoverageEdit::Constant(_) => "constant",
+        CoverageEdit::Pattern {
+            kind: PatternKind::Checker,
+            ..
+        } => "checker",
+        CoverageEdit::Pattern {
+            kind: PatternKind::Noise,
+            ..
+        } => "noise",
+        CoverageEdit::Pattern {
+            kind: PatternKind::Cells,
+            ..
+        } => "cells",
+    };
+    let pattern = |kind| CoverageEdit::Pattern {
+        kind,
+        scale: 4,
+        seed: 0,
+        threshold: Some(0.5),
+        screen: false,
+    };
+    ComboBox::from_id_salt(("coverage", i))
+        .selected_text(format!("coverage: {}", label(coverage)))
+        .show_ui(ui, |ui| {
+            for choice in [
+                CoverageEdit::None,
+                CoverageEdit::Constant(1.0),
+                pattern(PatternKind::Checker),
+                pattern(PatternKind::Noise),
+                pattern(PatternKind::Cells),
+            ] {
+                if ui
+                    .selectable_label(label(coverage) == label(&choice), label(&choice))
+                    .clicked()
+                    && label(coverage) != label(&choice)
+                {
+                    *coverage = choice;
+                }
+            }
+        });
+    match coverage {
+        CoverageEdit::None => {}
+        CoverageEdit::Constant(c) => {
+            ui.add(Slider::new(c, 0.0..=1.0).text("coverage"));
+        }
+        CoverageEdit::Pattern {
+            kind,
+            scale,
+            seed,
+            threshold,
+            screen,
+        } => {
+            ui.add(Slider::new(scale, 1..=64).text("scale"));
+            if *kind == PatternKind::Checker && *scale % 2 == 1 {
+                *scale += 1; // a checker tiles with an even scale
+            }
+            if *kind != PatternKind::Checker {
+                ui.add(DragValue::new(seed).range(0..=9999).prefix("seed "));
+                let mut on = threshold.is_some();
+                ui.horizontal(|ui| {
+                    ui.checkbox(&mut on, "threshold");
+                    let mut t = threshold.unwrap_or(0.5);
+                    ui.add_enabled(on, Slider::new(&mut t, 0.0..=1.0));
+                    *threshold = on.then_some(t);
+                });
+            }
+            ui.checkbox(screen, "screen coordinates (pixel for pixel)");
         }
     }
 }
@@ -758,4 +945,41 @@ fn file_stem(path: &Path) -> String {
     path.file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What the coverage editor writes reads back as what it edited.
+    #[test]
+    fn a_coverage_edit_round_trips_through_the_file_format() {
+        let base = "[[layer]]\nior = [1.5, 1.5, 1.5]\nroughness = 0.1\n[[layer]]\ndiffuse = [0.5, 0.5, 0.5]\n";
+        let stack = Stack::from_toml(base, Path::new("test.toml")).unwrap();
+        assert_eq!(coverage_of(&stack, 0), CoverageEdit::None);
+        for edit in [
+            CoverageEdit::Constant(0.25),
+            CoverageEdit::Pattern {
+                kind: PatternKind::Noise,
+                scale: 6,
+                seed: 3,
+                threshold: Some(0.4),
+                screen: false,
+            },
+            CoverageEdit::Pattern {
+                kind: PatternKind::Checker,
+                scale: 8,
+                seed: 0,
+                threshold: None,
+                screen: true,
+            },
+        ] {
+            let mut document: toml::Table = stack.to_toml().parse().unwrap();
+            let layers = document.get_mut("layer").unwrap().as_array_mut().unwrap();
+            let layer = layers[0].as_table_mut().unwrap();
+            layer.insert("coverage".into(), coverage_value(edit).unwrap());
+            let edited = Stack::from_toml(&document.to_string(), Path::new("test.toml")).unwrap();
+            assert_eq!(coverage_of(&edited, 0), edit);
+        }
+    }
 }
