@@ -11,7 +11,7 @@ use toml::{Table, Value};
 use std::sync::Arc;
 
 use super::layer::LayerReader;
-use super::surface::{self, BakeContext, Surface};
+use super::surface::{self, Surface};
 use super::{MaterialError, Stack};
 use crate::variant::{Model, MAX_LAYERS_LIMIT};
 
@@ -63,7 +63,7 @@ pub(super) fn parse(text: &str, path: &Path) -> Result<Stack, MaterialError> {
         return Err(file_error(path, message));
     }
     let surface = varies
-        .then(|| Surface::bake(resolution, surfaces, &layers, &BakeContext { path }))
+        .then(|| Surface::bake(resolution, surfaces, &layers, path))
         .transpose()?
         .map(Arc::new);
     Ok(Stack {

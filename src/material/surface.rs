@@ -416,11 +416,6 @@ impl SurfaceMaps {
     }
 }
 
-/// What a bake needs to name a failing texel.
-pub(super) struct BakeContext<'a> {
-    pub path: &'a Path,
-}
-
 impl Surface {
     /// Bakes the sources of every layer over `base` (the stack's constants) into maps of
     /// `resolution`² texels. Errs when a layer changes kind across its surface (a conductor
@@ -429,13 +424,20 @@ impl Surface {
         resolution: u32,
         layers: Vec<LayerSurface>,
         base: &[LayerParams],
-        context: &BakeContext,
+        path: &Path,
     ) -> Result<Self, MaterialError> {
         let n = resolution as usize;
-        let coords = |i: usize| ((i % n) as f64 + 0.5) / n as f64;
+        // Texel i's centre in texture coordinates, rows top to bottom.
+        let centre = |i: usize| {
+            let at = |k: usize| (k as f64 + 0.5) / n as f64;
+            (at(i % n), at(i / n))
+        };
         let grid = |f: &dyn Fn(f64, f64) -> [f64; 3]| -> Vec<[f64; 3]> {
             (0..n * n)
-                .map(|i| f(coords(i), ((i / n) as f64 + 0.5) / n as f64))
+                .map(|i| {
+                    let (u, v) = centre(i);
+                    f(u, v)
+                })
                 .collect()
         };
         let to_slice = |values: &[[f64; 3]]| -> Vec<[f32; 4]> {
@@ -449,7 +451,7 @@ impl Surface {
         for (index, surface) in layers.iter().enumerate() {
             let layer = &base[index];
             let error = |field: &str, message: String| MaterialError::Field {
-                path: context.path.to_owned(),
+                path: path.to_owned(),
                 layer: index + 1,
                 field: field.to_owned(),
                 message,
@@ -478,7 +480,7 @@ impl Surface {
                 let space = f0_source.or(tint_source).map_or(Coords::Uv, |s| s.coords);
                 let (etas, kappas): (Vec<[f64; 3]>, Vec<[f64; 3]>) = (0..n * n)
                     .map(|i| {
-                        let (u, v) = (coords(i), ((i / n) as f64 + 0.5) / n as f64);
+                        let (u, v) = centre(i);
                         let r = f0_source.map_or(f0, |s| s.value(u, v));
                         let g = tint_source.map_or(tint, |s| s.value(u, v));
                         let pairs = [0, 1, 2].map(|c| gulbrandsen(r[c], g[c]));
@@ -513,7 +515,8 @@ impl Surface {
                         let salt = hash(index as u32 ^ 0x5bd1_e995);
                         let texels = (0..n * n)
                             .map(|i| {
-                                let c = source.value(coords(i), ((i / n) as f64 + 0.5) / n as f64);
+                                let (u, v) = centre(i);
+                                let c = source.value(u, v);
                                 let h = unit(hash3((i % n) as u32, (i / n) as u32, salt));
                                 let covered = f32::from(u8::from(c[0] > h));
                                 [covered, 0.0, 0.0, 0.0]
@@ -792,10 +795,8 @@ impl SourceReader<'_> {
     }
 
     fn texture(&self) -> Result<Shape, MaterialError> {
-        for key in ["threshold"] {
-            if self.table.contains_key(key) {
-                return Err(self.error(key, "only a pattern has a threshold"));
-            }
+        if self.table.contains_key("threshold") {
+            return Err(self.error("threshold", "only a pattern has a threshold"));
         }
         let Some(Value::String(name)) = self.table.get("texture") else {
             return Err(self.error("texture", "expected a file name (a string)"));
@@ -1053,7 +1054,7 @@ pub fn read_texture(path: &Path, space: ColorSpace) -> Result<TextureImage, Stri
     })
 }
 
-/// The error for a whole surface: the file and a message.
+/// The top-level `map_resolution`, or the default; the error names the file.
 pub(super) fn resolution(table: &Table, path: &Path) -> Result<u32, MaterialError> {
     match table.get("map_resolution") {
         None => Ok(DEFAULT_RESOLUTION),

@@ -69,6 +69,12 @@ impl LayerParams {
     }
 }
 
+/// Whether a stack ends in a diffuse base ([`diffuse`]): a pass for it keeps that lobe's code
+/// (`ShadeSpec::diffuse_base`).
+pub fn ends_diffuse(layers: &[LayerParams]) -> bool {
+    layers.last().is_some_and(LayerParams::is_diffuse)
+}
+
 /// One reflected lobe: its RGB energy (directional albedo) and GGX roughness α.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lobe {

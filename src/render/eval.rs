@@ -230,7 +230,7 @@ impl<'g> GpuEvaluator<'g> {
         let kernel = match &self.kernel {
             Some(kernel) => {
                 check_generic_fit(self.variant, layers)?;
-                if crate::render::renderer::ends_diffuse(layers) {
+                if crate::model::ends_diffuse(layers) {
                     if self.diffuse_kernel.get().is_none() {
                         let spec = ShadeSpec {
                             diffuse_base: 1,

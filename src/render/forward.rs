@@ -89,7 +89,7 @@ impl ForwardPass {
     /// Whether this pass shades `layers` as its variant says: any stack that fits a generic
     /// pass, the same structure under `specialized`, the same stack under the other modes.
     pub fn check_material(&self, layers: &[LayerParams]) -> Result<()> {
-        if super::renderer::ends_diffuse(layers) != self.diffuse {
+        if crate::model::ends_diffuse(layers) != self.diffuse {
             let kind = |d: bool| if d { "ends in" } else { "has no" };
             return Err(Error::Unsupported(format!(
                 "this pass ({}) was built for a stack that {} diffuse base and this one {} one; \

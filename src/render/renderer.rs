@@ -33,12 +33,6 @@ use super::surface::SurfaceTexture;
 use crate::material::Surface;
 use std::sync::Arc;
 
-/// Whether a stack ends in a diffuse base: its generic pass keeps that lobe's code
-/// (`ShadeSpec::diffuse_base`).
-pub fn ends_diffuse(layers: &[LayerParams]) -> bool {
-    layers.last().is_some_and(LayerParams::is_diffuse)
-}
-
 /// The render target's format: linear HDR RGBA.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum TargetFormat {
@@ -253,7 +247,7 @@ impl<'g> Renderer<'g> {
             spec.surface_maps = self
                 .surface_texture()
                 .map_or(0, |t| t.surface.maps.spec_bits());
-            spec.diffuse_base = u32::from(ends_diffuse(layers));
+            spec.diffuse_base = u32::from(crate::model::ends_diffuse(layers));
             spec.lights = u32::from(!self.lighting.lights.is_empty());
             let format = self.target.format();
             let pass = ForwardPass::new(self.gpu, &self.layout, format, variant, &spec, None)?;

@@ -335,7 +335,7 @@ impl Panels {
     /// Turns the first directional light by a drag of `d` points (azimuth across, elevation
     /// up and down), adding one from the upper left when there is none.
     fn turn_light(&mut self, d: egui::Vec2) {
-        use crate::render::lights::{Light, LightKind};
+        use crate::render::lights::LightKind;
         let index = match self
             .lighting
             .lights
@@ -344,14 +344,7 @@ impl Panels {
         {
             Some(i) => i,
             None if self.lighting.lights.len() < crate::render::lights::MAX_LIGHTS => {
-                self.lighting.lights.push(Light {
-                    kind: LightKind::Directional {
-                        direction: direction_of(-0.6, 0.6),
-                        angular_radius: 0.0,
-                    },
-                    color: [1.0; 3],
-                    intensity: 3.0,
-                });
+                self.lighting.lights.push(new_directional());
                 self.lighting.lights.len() - 1
             }
             None => return,
@@ -423,14 +416,7 @@ impl Panels {
                 .add_enabled(room, egui::Button::new("add directional"))
                 .clicked()
             {
-                self.lighting.lights.push(Light {
-                    kind: LightKind::Directional {
-                        direction: direction_of(-0.6, 0.6),
-                        angular_radius: 0.0,
-                    },
-                    color: [1.0; 3],
-                    intensity: 3.0,
-                });
+                self.lighting.lights.push(new_directional());
             }
             if ui
                 .add_enabled(room, egui::Button::new("add point"))
@@ -824,6 +810,19 @@ fn coverage_editor(ui: &mut Ui, i: usize, coverage: &mut CoverageEdit) {
             }
             ui.checkbox(screen, "screen coordinates (pixel for pixel)");
         }
+    }
+}
+
+/// The directional light the viewer adds: white, from the upper left.
+fn new_directional() -> crate::render::lights::Light {
+    use crate::render::lights::{Light, LightKind};
+    Light {
+        kind: LightKind::Directional {
+            direction: direction_of(-0.6, 0.6),
+            angular_radius: 0.0,
+        },
+        color: [1.0; 3],
+        intensity: 3.0,
     }
 }
 

@@ -132,7 +132,7 @@ fn step(
         Some(p) => {
             p.variant != request.variant
                 || p.surface != crate::render::surface::spec_bits(request.surface.as_ref())
-                || p.diffuse != crate::render::renderer::ends_diffuse(&request.layers)
+                || p.diffuse != crate::model::ends_diffuse(&request.layers)
                 || p.lights == request.lighting.lights.is_empty()
                 || (p.material.is_some() && p.check_material(&request.layers).is_err())
         }
