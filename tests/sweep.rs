@@ -209,6 +209,30 @@ fn bad_sweep_files_are_refused_before_any_gpu_work() {
             assert!(e.contains(w), "{sizes}: `{w}` missing from {e}");
         }
     }
+    for (body, words) in [
+        (
+            "tile_width = 128\nsize = \"320x64\"\n",
+            vec![
+                "`size`",
+                "320x64",
+                "not a multiple of the study's tile_width 128",
+            ],
+        ),
+        (
+            "tile_width = 128\nsize = \"256x64\"\n",
+            vec![
+                "`counter_sizes`",
+                "48x48 and 96x96",
+                "multiples of the study's tile_width 128",
+            ],
+        ),
+        ("tile_width = 0\n", vec!["`tile_width`", "1 pixel or more"]),
+    ] {
+        let e = load_error("tile-width", body);
+        for w in words {
+            assert!(e.contains(w), "`{w}` missing from {e}");
+        }
+    }
     let e = load_error("old-size", "counter_size = \"24x24\"\n");
     assert!(
         e.contains("`counter_size`") && e.contains("counter_sizes = ["),
@@ -285,9 +309,10 @@ fn every_committed_sweep_file_expands() {
     // 5 sizes × 5 active counts, less the 4 + 3 + 1 that do not fit (1, 2 and 4 layers).
     assert_eq!(static_size.points.len(), 25 - 8);
     for s in &studies {
-        // The divergence study keeps its own sizes (`keep_size`): its masks are in pixels.
+        // The divergence study keeps its own sizes: the suite's widths are not multiples of
+        // its `tile_width`.
         let (size, counted) = if s.name == "divergence" {
-            ((256, 128), "128x64,128x128")
+            ((256, 128), "128x16,128x32")
         } else {
             ((160, 90), "24x24,48x48")
         };
@@ -338,12 +363,8 @@ fn every_committed_sweep_file_expands() {
     let names = |list: &[sweep::Study]| list.iter().map(|s| s.name.clone()).collect::<Vec<_>>();
     assert_eq!(names(&gpu), names(&studies));
     for s in &gpu {
-        let size = if s.name == "divergence" {
-            (256, 128)
-        } else {
-            (1920, 1080)
-        };
-        assert_eq!((s.width, s.height), size, "{}", s.name);
+        // 1920 is a multiple of the divergence study's `tile_width`.
+        assert_eq!((s.width, s.height), (1920, 1080), "{}", s.name);
         assert_eq!(s.counter, None, "{}: nothing to count on a GPU", s.name);
     }
 }

@@ -15,7 +15,7 @@
 //! counter = "instructions"            # optional: also count instructions under callgrind
 //! counter_sizes = ["48x48", "96x96"]  # the two counted resolutions (per pixel: the difference)
 //! fit = "linear"                      # optional: report a least-squares line along axis 1
-//! keep_size = true                    # optional: a suite's size and counter_sizes do not apply
+//! tile_width = 128                    # optional: a suite's sizes apply if their width is a multiple
 //! [[axis]]                            # cartesian product, first axis on the charts' x axis
 //! name = "max_layers"
 //! values = [2, 4, 8, 16]
@@ -50,6 +50,8 @@ use super::counter::{CounterSetup, CounterSizes};
 
 /// What a study shades when its file names no `scene`: every pixel, as the talk measured.
 pub const DEFAULT_SCENE: Scene = Scene::FullScreen;
+/// The frame a study's file names no `size` for.
+const DEFAULT_SIZE: &str = "320x180";
 /// The pseudo-axes a sweep adds to the variant axes: `variant` takes key fragments
 /// (`"mode=generic,max_layers=4"`), for studies whose variants are not a product of axes.
 pub const EXTRA_AXES: [&str; 3] = ["active_layers", "material", "variant"];
@@ -74,9 +76,11 @@ pub struct SweepFile {
     pub warmup: Option<u32>,
     pub counter: Option<String>,
     pub counter_sizes: Option<Vec<String>>,
-    /// `true`: a suite's `size` and `counter_sizes` do not apply to this study, whose
-    /// materials are sized in pixels (masks in screen coordinates: the divergence study).
-    pub keep_size: Option<bool>,
+    /// The period across the frame, in pixels, of this study's materials (masks in screen
+    /// coordinates: the divergence study), so that every row holds whole periods. A suite's
+    /// `size` or `counter_sizes` whose width is not a multiple of it do not apply to this
+    /// study, whose own do; its own must be multiples.
+    pub tile_width: Option<u32>,
     /// Replaced by `counter_sizes`; read only to say so.
     pub counter_size: Option<toml::Value>,
     pub fit: Option<String>,
@@ -374,14 +378,31 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
             &format!("`{name}`: use letters, digits, `-` and `_` (it names a directory)"),
         ));
     }
-    let keep_size = sweep.keep_size == Some(true);
-    let size_text = over
-        .size
-        .clone()
-        .filter(|_| !keep_size)
-        .or_else(|| sweep.size.clone())
-        .unwrap_or_else(|| "320x180".into());
-    let Size { width, height } = parse_size(file, "size", &size_text)?;
+    let tile = match sweep.tile_width {
+        Some(0) => {
+            return Err(bad(
+                file,
+                "tile_width",
+                "0: give a period of 1 pixel or more",
+            ))
+        }
+        Some(tile) => tile,
+        None => 1,
+    };
+    let fits = |size: &Size| size.width % tile == 0;
+    let own_size = parse_size(file, "size", sweep.size.as_deref().unwrap_or(DEFAULT_SIZE))?;
+    if !fits(&own_size) {
+        return Err(bad(
+            file,
+            "size",
+            &format!("{own_size}: its width is not a multiple of the study's tile_width {tile}"),
+        ));
+    }
+    let suite_size = match &over.size {
+        Some(text) => Some(parse_size(file, "size", text)?),
+        None => None,
+    };
+    let Size { width, height } = suite_size.filter(fits).unwrap_or(own_size);
     let scene = match over.scene.as_ref().or(sweep.scene.as_ref()) {
         None => DEFAULT_SCENE,
         Some(text) => text.parse().map_err(|e: String| bad(file, "scene", &e))?,
@@ -411,11 +432,27 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
         ));
     }
     let warmup = over.warmup.or(sweep.warmup).unwrap_or(2);
-    let suite_sizes = over.counter_sizes.as_ref().filter(|_| !keep_size);
-    let counter_sizes = match suite_sizes.or(sweep.counter_sizes.as_ref()) {
+    let own_counter_sizes = match &sweep.counter_sizes {
         Some(sizes) => parse_counter_sizes(file, sizes)?,
         None => CounterSizes::DEFAULT,
     };
+    if !(fits(&own_counter_sizes.small) && fits(&own_counter_sizes.large)) {
+        return Err(bad(
+            file,
+            "counter_sizes",
+            &format!(
+                "{} and {}: their widths must be multiples of the study's tile_width {tile}",
+                own_counter_sizes.small, own_counter_sizes.large
+            ),
+        ));
+    }
+    let suite_counter_sizes = match &over.counter_sizes {
+        Some(sizes) => Some(parse_counter_sizes(file, sizes)?),
+        None => None,
+    };
+    let counter_sizes = suite_counter_sizes
+        .filter(|sizes| fits(&sizes.small) && fits(&sizes.large))
+        .unwrap_or(own_counter_sizes);
     let counter = match over.counter.as_deref().or(sweep.counter.as_deref()) {
         None | Some("none") => None,
         Some("instructions") => Some(counter_sizes),
