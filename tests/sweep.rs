@@ -312,7 +312,7 @@ fn every_committed_sweep_file_expands() {
         // The divergence study keeps its own sizes: the suite's widths are not multiples of
         // its `tile_width`.
         let (size, counted) = if s.name == "divergence" {
-            ((256, 128), "128x16,128x32")
+            ((256, 128), "128x32,128x64")
         } else {
             ((160, 90), "24x24,48x48")
         };
@@ -332,6 +332,7 @@ fn every_committed_sweep_file_expands() {
         "tir",
         "fgd",
         "g2",
+        "lights",
         "flux",
         "growth",
         "specialization",
