@@ -402,3 +402,40 @@ fn a_suite_runs_the_studies_named_and_refuses_others() {
     );
     assert!(!err.contains("panicked"), "{err}");
 }
+
+#[test]
+fn a_suite_counts_studies_lit_differently_each_under_its_own_lights() {
+    let dir = common::scratch_dir("sweep-lit-suite");
+    let study = |name: &str, lights: &str| {
+        format!(
+            "name = \"{name}\"\nmaterials = [\"gold\"]\n{lights}size = \"16x16\"\nframes = 1\n\
+             warmup = 0\ncounter = \"instructions\"\ncounter_sizes = [\"8x8\", \"16x16\"]\n\
+             [[axis]]\nname = \"model\"\nvalues = [\"ggx\"]\n"
+        )
+    };
+    std::fs::write(dir.join("dark.toml"), study("dark", "")).unwrap();
+    std::fs::write(
+        dir.join("lit.toml"),
+        study("lit", "lights = \"sun-only\"\n"),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("suite.toml"),
+        "name = \"both\"\nstudies = [\"dark.toml\", \"lit.toml\"]\n",
+    )
+    .unwrap();
+    let out = lamina(
+        &["--validation", "sweep", "suite.toml", "--out", "res"],
+        &dir,
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let per_pixel = |name: &str| {
+        let path = dir.join("res").join(name).join("results.json");
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
+        json["runs"][0]["instructions_per_pixel"].as_f64().unwrap()
+    };
+    let (dark, lit) = (per_pixel("dark"), per_pixel("lit"));
+    // The sun's loop runs only in the lit study's pipeline.
+    assert!(lit > dark + 50.0, "lit {lit} against dark {dark}");
+}

@@ -891,7 +891,7 @@ pub fn time(
 }
 
 /// Counts the instructions of every timed study that asks for them, in one pool of workers
-/// per scene and counter sizes (so a suite starts its workers and compiles each shader under
+/// per scene, counter sizes and lighting (so a suite starts its workers and compiles each shader under
 /// valgrind once, not once per study). `studies[i]` was timed into `timed[i]`.
 pub fn count(
     studies: &[Study],
@@ -899,11 +899,13 @@ pub fn count(
     setup: &CounterSetup,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<()> {
-    let mut keys: Vec<(Scene, CounterSizes)> = Vec::new();
-    for s in studies {
+    // One pool of workers per scene, counted sizes and lighting: a worker draws one of each.
+    let mut keys: Vec<(Scene, CounterSizes, Option<String>)> = Vec::new();
+    for (s, t) in studies.iter().zip(timed.iter()) {
         if let Some(sizes) = s.counter {
-            if !keys.contains(&(s.scene, sizes)) {
-                keys.push((s.scene, sizes));
+            let key = (s.scene, sizes, t.results.lighting.clone());
+            if !keys.contains(&key) {
+                keys.push(key);
             }
         }
     }
@@ -914,11 +916,13 @@ pub fn count(
         .map(|(_, t)| t.cases.len() * 2)
         .sum();
     let mut before = 0;
-    for (scene, sizes) in keys {
+    for (scene, sizes, lighting) in keys {
         let mut batches: Vec<(&mut super::bench::Results, &[Case])> = studies
             .iter()
             .zip(timed.iter_mut())
-            .filter(|(s, _)| s.scene == scene && s.counter == Some(sizes))
+            .filter(|(s, t)| {
+                s.scene == scene && s.counter == Some(sizes) && t.results.lighting == lighting
+            })
             .map(|(_, t)| (&mut t.results, t.cases.as_slice()))
             .collect();
         let here: usize = batches.iter().map(|(_, c)| c.len() * 2).sum();
