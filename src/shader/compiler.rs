@@ -258,20 +258,30 @@ fn resolve_include(requested: &str, requester: &str) -> Result<shaderc::Resolved
 }
 
 /// Compiles entry points; one shaderc compiler per instance, which remembers the SPIR-V of
-/// every entry point and set of defines it compiled: a variant's pipelines differ in their
-/// specialization constants, not their SPIR-V, and shaderc takes about a second over the
-/// forward shader (many times that under valgrind, where the counting workers run).
+/// every entry point and set of defines it compiled, in memory and on disk
+/// (`$LAMINA_CACHE/spirv/`): a variant's pipelines differ in their specialization constants,
+/// not their SPIR-V, and shaderc takes about a second over the forward shader natively and
+/// several under valgrind, where the counting workers run — they read what the timing run
+/// compiled.
 pub struct ShaderCompiler {
     compiler: shaderc::Compiler,
     compiled: Mutex<HashMap<String, Arc<[u32]>>>,
+    disk: Option<PathBuf>,
 }
 
 impl ShaderCompiler {
+    /// A compiler with the disk cache under lamina's cache root (none when it has no root).
     pub fn new() -> Result<Self, ShaderError> {
+        Self::with_disk_cache(crate::tables::cache::root().map(|r| r.join("spirv")))
+    }
+
+    /// A compiler keeping its SPIR-V in `disk` too (`None`: in memory only).
+    pub fn with_disk_cache(disk: Option<PathBuf>) -> Result<Self, ShaderError> {
         let compiler = shaderc::Compiler::new().map_err(|e| ShaderError::Init(e.to_string()))?;
         Ok(Self {
             compiler,
             compiled: Mutex::new(HashMap::new()),
+            disk,
         })
     }
 
@@ -292,7 +302,21 @@ impl ShaderCompiler {
         }
         let text = source(entry)
             .ok_or_else(|| ShaderError::UnknownEntry(entry.into(), entry_points().join(", ")))?;
-        let words: Arc<[u32]> = self.compile_source(entry, text, defines)?.into();
+        let file = self
+            .disk
+            .as_deref()
+            .map(|dir| SpirvFile::new(dir, entry, defines));
+        let words: Arc<[u32]> = match file.as_ref().and_then(SpirvFile::load) {
+            Some(words) => words.into(),
+            None => {
+                let words = self.compile_source(entry, text, defines)?;
+                if let Some(file) = &file {
+                    // A cache that cannot be written costs a compile next time, nothing more.
+                    file.store(&words);
+                }
+                words.into()
+            }
+        };
         lock().insert(key, Arc::clone(&words));
         Ok(words)
     }
@@ -333,6 +357,77 @@ impl ShaderCompiler {
     }
 }
 
+/// One entry point's SPIR-V on disk: `<entry>-<defines>-<sources>.spv`, the last two FNV-1a
+/// hashes (of the defines; of the entry's text, its includes and the host constants,
+/// [`entry_hash`]). The file holds a magic number, the word count, the words and a checksum;
+/// anything else reads as absent. Storing removes the entry's files for other sources.
+struct SpirvFile {
+    dir: PathBuf,
+    prefix: String,
+    name: String,
+}
+
+const SPIRV_MAGIC: &[u8; 8] = b"LAMSPV01";
+
+impl SpirvFile {
+    fn new(dir: &Path, entry: &str, defines: &[(&str, &str)]) -> Self {
+        let defines_hash = defines.iter().fold(0xcbf2_9ce4_8422_2325, |h, (n, v)| {
+            fnv1a(h, n.bytes().chain([0]).chain(v.bytes()).chain([0]))
+        });
+        let stem = entry.strip_suffix(".glsl").unwrap_or(entry);
+        let prefix = format!("{stem}-{defines_hash:016x}-");
+        let name = format!("{prefix}{:016x}.spv", entry_hash(entry));
+        Self {
+            dir: dir.to_owned(),
+            prefix,
+            name,
+        }
+    }
+
+    fn load(&self) -> Option<Vec<u32>> {
+        let bytes = std::fs::read(self.dir.join(&self.name)).ok()?;
+        let body = bytes.strip_prefix(SPIRV_MAGIC)?;
+        let (count, rest) = body.split_first_chunk::<8>()?;
+        let count = usize::try_from(u64::from_le_bytes(*count)).ok()?;
+        let (data, sum) = rest.split_at_checked(count.checked_mul(4)?)?;
+        if sum != crate::tables::cache::checksum(data).to_le_bytes() {
+            return None;
+        }
+        let words: Vec<u32> = data
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        (words.first() == Some(&0x0723_0203)).then_some(words)
+    }
+
+    fn store(&self, words: &[u32]) {
+        if std::fs::create_dir_all(&self.dir).is_err() {
+            return;
+        }
+        let data: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+        let mut bytes = SPIRV_MAGIC.to_vec();
+        bytes.extend((words.len() as u64).to_le_bytes());
+        bytes.extend(&data);
+        bytes.extend(crate::tables::cache::checksum(&data).to_le_bytes());
+        let path = self.dir.join(&self.name);
+        let written = crate::imageio::write_atomically(&path, |temp| {
+            std::fs::write(temp, &bytes).map_err(|e| e.to_string())
+        });
+        if written.is_err() {
+            return;
+        }
+        let Ok(entries) = std::fs::read_dir(&self.dir) else {
+            return;
+        };
+        for entry in entries.flatten() {
+            let file = entry.file_name().to_string_lossy().into_owned();
+            if file != self.name && file.starts_with(&self.prefix) && file.ends_with(".spv") {
+                let _ = std::fs::remove_file(entry.path());
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -352,6 +447,42 @@ mod tests {
             shaders.compile("nope.comp.glsl", &[]),
             Err(ShaderError::UnknownEntry(..))
         ));
+    }
+
+    #[test]
+    fn spirv_is_kept_on_disk_and_damaged_files_are_compiled_again() {
+        let dir = std::env::temp_dir().join(format!("lamina-spirv-test-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let entry = "tir_table.comp.glsl";
+        let defines = [("LAMINA_FP16", "1")];
+        let first = ShaderCompiler::with_disk_cache(Some(dir.clone())).unwrap();
+        let compiled = first.compile(entry, &defines).unwrap();
+        let file = SpirvFile::new(&dir, entry, &defines);
+        assert_eq!(
+            file.load().as_deref(),
+            Some(&compiled[..]),
+            "stored as compiled"
+        );
+        // Another compiler reads the file instead of compiling: planted words come back.
+        let planted = [0x0723_0203, 1, 2, 3];
+        file.store(&planted);
+        let second = ShaderCompiler::with_disk_cache(Some(dir.clone())).unwrap();
+        assert_eq!(&second.compile(entry, &defines).unwrap()[..], &planted[..]);
+        // Other defines are another file.
+        assert_ne!(&second.compile(entry, &[]).unwrap()[..], &planted[..]);
+        // A truncated file reads as absent: compiled again and rewritten whole.
+        let path = dir.join(&file.name);
+        let bytes = std::fs::read(&path).unwrap();
+        std::fs::write(&path, &bytes[..bytes.len() - 3]).unwrap();
+        let third = ShaderCompiler::with_disk_cache(Some(dir.clone())).unwrap();
+        assert_eq!(third.compile(entry, &defines).unwrap(), compiled);
+        assert_eq!(file.load().as_deref(), Some(&compiled[..]));
+        // A file of the same entry and defines from other sources is removed on store.
+        let stale = dir.join(format!("{}0000000000000000.spv", file.prefix));
+        std::fs::write(&stale, b"old").unwrap();
+        file.store(&compiled);
+        assert!(!stale.exists());
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -44,7 +44,8 @@ impl Key {
 }
 
 /// lamina's cache root, `$LAMINA_CACHE` (default `~/.cache/lamina`): the tables live in
-/// `tables/` under it, the pipeline caches in `pipelines/` (`crate::pipeline_cache`). `None` when
+/// `tables/` under it, the pipeline caches in `pipelines/` (`crate::pipeline_cache`), the
+/// compiled shaders in `spirv/` (`crate::shader::ShaderCompiler`). `None` when
 /// neither `LAMINA_CACHE` nor `HOME` is set.
 pub fn root() -> Option<PathBuf> {
     std::env::var_os("LAMINA_CACHE")
