@@ -54,7 +54,7 @@ pub const MAX_SCALE: u32 = 4096;
 pub const MAX_SLICES: usize = 127;
 
 /// A layer parameter that may vary.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Field {
     Ior,
     Kappa,

@@ -14,6 +14,7 @@ use crate::model::LayerParams;
 use crate::render::scene::Camera;
 use crate::variant::{Axis, Fgd, Mode, Model, Ndf, Tir, VariantKey, G2};
 
+use super::maps::{self, MapEdit, MapTexts};
 use super::{orbit, stack_model, summary, ViewOptions, HISTORY};
 
 /// Width of the side panel in points.
@@ -49,6 +50,8 @@ pub struct Panels {
     pub exposure: f32,
     /// Per layer: edit the artist form (F0, edge tint) instead of (η, κ).
     artist: Vec<Option<([f32; 3], [f32; 3])>>,
+    /// What is being typed into the map editors' text boxes.
+    map_texts: MapTexts,
     file: String,
     history: VecDeque<f64>,
     invocations: Option<u64>,
@@ -88,6 +91,7 @@ impl Panels {
         let distance = camera.eye.length();
         Ok(Self {
             artist: vec![None; options.stack.layers.len()],
+            map_texts: MapTexts::new(),
             stack: options.stack.clone(),
             lighting: options.lighting.clone(),
             requested: options.variant,
@@ -488,6 +492,7 @@ impl Panels {
             })
             .collect();
         let mut coverage_change = None;
+        let mut map_change = None;
         for (i, layer) in edit.iter_mut().enumerate() {
             let last = i + 1 == count;
             egui::CollapsingHeader::new(format!("layer {}{}", i + 1, describe(layer)))
@@ -507,7 +512,7 @@ impl Panels {
                     });
                     if !mapped[i].is_empty() {
                         ui.label(
-                            RichText::new(format!("from maps (see the file): {}", mapped[i]))
+                            RichText::new(format!("varies over the surface: {}", mapped[i]))
                                 .small(),
                         );
                     }
@@ -518,10 +523,18 @@ impl Panels {
                     if after != before {
                         coverage_change = Some((i, after));
                     }
+                    if let Some(edit) =
+                        maps::maps_editor(ui, i, &self.stack, tm6, &mut self.map_texts)
+                    {
+                        map_change = Some((i, edit));
+                    }
                 });
         }
         if let Some((i, coverage)) = coverage_change {
             self.set_coverage(i, coverage);
+        }
+        if let Some((i, edit)) = map_change {
+            self.set_map(i, &edit);
         }
         if ui.button("add a clear coat on top").clicked() {
             op = Some(LayerOp::AddTop);
@@ -529,6 +542,7 @@ impl Panels {
         let changed = edit != self.stack.layers || op.is_some();
         if let Some(op) = op {
             op.apply(&mut edit, &mut artist);
+            self.map_texts.clear();
         }
         self.artist = artist;
         if changed {
@@ -580,31 +594,32 @@ impl Panels {
     /// Gives layer `i` the coverage `coverage` through the file format (the maps are baked
     /// again), or says why the format refuses it.
     fn set_coverage(&mut self, i: usize, coverage: CoverageEdit) {
-        let mut document: toml::Table = match self.stack.to_toml().parse() {
-            Ok(t) => t,
-            Err(e) => {
-                self.message = Some(format!("the stack's text does not parse: {e}"));
-                return;
-            }
-        };
-        let Some(layer) = document
-            .get_mut("layer")
-            .and_then(toml::Value::as_array_mut)
-            .and_then(|layers| layers.get_mut(i))
-            .and_then(toml::Value::as_table_mut)
-        else {
-            return;
-        };
-        match coverage_value(coverage) {
-            Some(value) => layer.insert("coverage".into(), value),
-            None => layer.remove("coverage"),
-        };
-        match Stack::from_toml(&document.to_string(), Path::new("(edited stack)")) {
+        let edited = maps::edit_layer(&self.stack, i, |layer| {
+            match coverage_value(coverage) {
+                Some(value) => layer.insert("coverage".into(), value),
+                None => layer.remove("coverage"),
+            };
+        });
+        self.take_edit(edited);
+    }
+
+    /// Makes `edit` to layer `i`'s maps through the file format, or says why it refuses.
+    fn set_map(&mut self, i: usize, edit: &MapEdit) {
+        let edited = maps::apply(&self.stack, i, edit);
+        if edited.is_ok() {
+            // The text boxes start again from what the file now says.
+            self.map_texts.retain(|(layer, _, _), _| *layer != i);
+        }
+        self.take_edit(edited);
+    }
+
+    fn take_edit(&mut self, edited: std::result::Result<Stack, String>) {
+        match edited {
             Ok(valid) => {
                 self.stack = valid;
                 self.message = None;
             }
-            Err(e) => self.message = Some(e.to_string()),
+            Err(e) => self.message = Some(e),
         }
     }
 
@@ -612,6 +627,7 @@ impl Panels {
         match Stack::load(path) {
             Ok(stack) => {
                 self.artist = vec![None; stack.layers.len()];
+                self.map_texts.clear();
                 if stack.layers.len() > self.requested.max_layers as usize {
                     self.requested.max_layers = stack.layers.len() as u32;
                 }
@@ -950,7 +966,7 @@ fn file_stem(path: &Path) -> String {
 mod tests {
     use super::*;
 
-    /// What the coverage editor writes reads back as what it edited.
+    /// What the coverage editor writes reads back as what it edited, and "none" removes it.
     #[test]
     fn a_coverage_edit_round_trips_through_the_file_format() {
         let base = "[[layer]]\nior = [1.5, 1.5, 1.5]\nroughness = 0.1\n[[layer]]\ndiffuse = [0.5, 0.5, 0.5]\n";
@@ -973,12 +989,18 @@ mod tests {
                 screen: true,
             },
         ] {
-            let mut document: toml::Table = stack.to_toml().parse().unwrap();
-            let layers = document.get_mut("layer").unwrap().as_array_mut().unwrap();
-            let layer = layers[0].as_table_mut().unwrap();
-            layer.insert("coverage".into(), coverage_value(edit).unwrap());
-            let edited = Stack::from_toml(&document.to_string(), Path::new("test.toml")).unwrap();
+            let edited = maps::edit_layer(&stack, 0, |layer| {
+                layer.insert("coverage".into(), coverage_value(edit).unwrap());
+            })
+            .unwrap();
             assert_eq!(coverage_of(&edited, 0), edit);
+            // Taking the last map away takes its `map_resolution` too.
+            let cleared = maps::edit_layer(&edited, 0, |layer| {
+                layer.remove("coverage");
+            })
+            .unwrap();
+            assert_eq!(coverage_of(&cleared, 0), CoverageEdit::None);
+            assert!(cleared.surface.is_none());
         }
     }
 }
