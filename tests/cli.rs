@@ -853,3 +853,33 @@ fn bad_maps_are_named_and_nothing_is_written() {
         &["varies over the surface", "mode=generic"],
     );
 }
+
+/// A reader that stops early (`lamina sweep FILE --dry-run | head -1`) ends lamina quietly, by
+/// the pipe's signal, not in a panic. The pipe is closed before lamina writes, so every run
+/// of this test meets it.
+#[test]
+fn output_into_a_closed_pipe_ends_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    let suite = common::repo_path("profiling/sweeps/reproduce.toml");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_lamina"))
+        .args(["sweep", suite.to_str().unwrap(), "--dry-run"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(
+        out.status.signal(),
+        Some(libc_sigpipe()),
+        "{:?}",
+        out.status
+    );
+}
+
+/// SIGPIPE's number on Linux.
+fn libc_sigpipe() -> i32 {
+    13
+}

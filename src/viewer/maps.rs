@@ -92,17 +92,28 @@ pub fn edit_layer(
     i: usize,
     change: impl FnOnce(&mut Table),
 ) -> Result<Stack, String> {
+    if i >= stack.layers.len() {
+        return Err(format!("no layer {}", i + 1));
+    }
+    edit_document(stack, |document| {
+        let layer = document
+            .get_mut("layer")
+            .and_then(Value::as_array_mut)
+            .and_then(|layers| layers.get_mut(i))
+            .and_then(Value::as_table_mut);
+        if let Some(layer) = layer {
+            change(layer);
+        }
+    })
+}
+
+/// `stack` in its file form changed by `change`, read back as a file.
+pub fn edit_document(stack: &Stack, change: impl FnOnce(&mut Table)) -> Result<Stack, String> {
     let mut document: Table = stack
         .to_toml()
         .parse()
         .map_err(|e| format!("the stack's text does not parse: {e}"))?;
-    let layer = document
-        .get_mut("layer")
-        .and_then(Value::as_array_mut)
-        .and_then(|layers| layers.get_mut(i))
-        .and_then(Value::as_table_mut)
-        .ok_or_else(|| format!("no layer {}", i + 1))?;
-    change(layer);
+    change(&mut document);
     // `map_resolution` sizes maps; the file refuses it once no layer has one.
     let mapped = |layer: &Value| {
         layer.as_table().is_some_and(|t| {

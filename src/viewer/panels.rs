@@ -539,14 +539,18 @@ impl Panels {
         if ui.button("add a clear coat on top").clicked() {
             op = Some(LayerOp::AddTop);
         }
-        let changed = edit != self.stack.layers || op.is_some();
         if let Some(op) = op {
-            op.apply(&mut edit, &mut artist);
+            // Layers move, go and come in the file's form, so each keeps its maps.
+            op.apply_artist(&mut artist);
+            self.artist = artist;
             self.map_texts.clear();
-        }
-        self.artist = artist;
-        if changed {
-            self.try_stack(edit);
+            let edited = maps::edit_document(&self.stack, |document| op.apply(document));
+            self.accept(edited);
+        } else {
+            self.artist = artist;
+            if edit != self.stack.layers {
+                self.try_stack(edit);
+            }
         }
     }
 
@@ -566,7 +570,15 @@ impl Panels {
             layers,
             ..self.stack.clone()
         };
-        match Stack::from_toml(&candidate.to_toml(), Path::new("(edited stack)")) {
+        let valid = Stack::from_toml(&candidate.to_toml(), Path::new("(edited stack)"))
+            .map_err(|e| e.to_string());
+        self.accept(valid);
+    }
+
+    /// Takes a validated edit of the stack (or shows why it was refused), and says when the
+    /// stack outgrows the requested `max_layers`.
+    fn accept(&mut self, edited: std::result::Result<Stack, String>) {
+        match edited {
             Ok(valid) => {
                 self.artist.resize(valid.layers.len(), None);
                 self.stack = valid;
@@ -587,7 +599,7 @@ impl Panels {
                     self.message = None;
                 }
             }
-            Err(e) => self.message = Some(e.to_string()),
+            Err(e) => self.message = Some(e),
         }
     }
 
@@ -600,7 +612,7 @@ impl Panels {
                 None => layer.remove("coverage"),
             };
         });
-        self.take_edit(edited);
+        self.accept(edited);
     }
 
     /// Makes `edit` to layer `i`'s maps through the file format, or says why it refuses.
@@ -610,17 +622,7 @@ impl Panels {
             // The text boxes start again from what the file now says.
             self.map_texts.retain(|(layer, _, _), _| *layer != i);
         }
-        self.take_edit(edited);
-    }
-
-    fn take_edit(&mut self, edited: std::result::Result<Stack, String>) {
-        match edited {
-            Ok(valid) => {
-                self.stack = valid;
-                self.message = None;
-            }
-            Err(e) => self.message = Some(e),
-        }
+        self.accept(edited);
     }
 
     fn load(&mut self, path: &Path) {
@@ -650,36 +652,37 @@ enum LayerOp {
 }
 
 impl LayerOp {
-    fn apply(self, layers: &mut Vec<LayerParams>, artist: &mut Vec<Option<([f32; 3], [f32; 3])>>) {
-        match self {
-            Self::Up(i) => {
-                layers.swap(i - 1, i);
-                artist.swap(i - 1, i);
-            }
-            Self::Down(i) => {
-                layers.swap(i, i + 1);
-                artist.swap(i, i + 1);
-            }
+    /// The operation on the file's `layer` array (each layer's table carries its maps).
+    fn apply(&self, document: &mut toml::Table) {
+        let Some(layers) = document
+            .get_mut("layer")
+            .and_then(toml::Value::as_array_mut)
+        else {
+            return;
+        };
+        match *self {
+            Self::Up(i) => layers.swap(i - 1, i),
+            Self::Down(i) => layers.swap(i, i + 1),
             Self::Remove(i) => {
                 layers.remove(i);
-                artist.remove(i);
             }
             Self::AddTop => {
-                layers.insert(
-                    0,
-                    LayerParams {
-                        ior: [1.5; 3],
-                        kappa: [0.0; 3],
-                        roughness: 0.05,
-                        depth: 0.0,
-                        sigma_s: [0.0; 3],
-                        sigma_a: [0.0; 3],
-                        g: 0.0,
-                        diffuse: None,
-                    },
-                );
-                artist.insert(0, None);
+                let mut coat = toml::Table::new();
+                coat.insert("ior".into(), toml::Value::Array(vec![1.5.into(); 3]));
+                coat.insert("roughness".into(), 0.05.into());
+                layers.insert(0, toml::Value::Table(coat));
             }
+        }
+    }
+
+    fn apply_artist(&self, artist: &mut Vec<Option<([f32; 3], [f32; 3])>>) {
+        match *self {
+            Self::Up(i) => artist.swap(i - 1, i),
+            Self::Down(i) => artist.swap(i, i + 1),
+            Self::Remove(i) => {
+                artist.remove(i);
+            }
+            Self::AddTop => artist.insert(0, None),
         }
     }
 }
@@ -965,6 +968,35 @@ fn file_stem(path: &Path) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Moving, removing and adding layers keeps each layer's maps with it.
+    #[test]
+    fn layer_operations_carry_the_maps() {
+        let text = "[[layer]]\nior = [1.5, 1.5, 1.5]\nroughness = 0.1\n\
+                    coverage = { pattern = \"checker\", scale = 4 }\n\
+                    [[layer]]\nior = [1.4, 1.4, 1.4]\nroughness = 0.2\n\
+                    [[layer]]\nior = [0.2, 0.4, 1.4]\nkappa = [4.0, 2.4, 1.6]\nroughness = 0.3\n";
+        let stack = Stack::from_toml(text, Path::new("test.toml")).unwrap();
+        let coverage = |s: &Stack, i: usize| {
+            s.surface
+                .as_ref()
+                .and_then(|m| m.layers.get(i))
+                .is_some_and(|l| l.sources.iter().any(|(f, _)| *f == Field::Coverage))
+        };
+        assert!(coverage(&stack, 0) && !coverage(&stack, 1));
+        let moved = maps::edit_document(&stack, |d| LayerOp::Down(0).apply(d));
+        let moved = moved.unwrap();
+        assert!(
+            !coverage(&moved, 0) && coverage(&moved, 1),
+            "the coverage moved with its coat"
+        );
+        assert_eq!(moved.layers[1].ior, stack.layers[0].ior);
+        let added = maps::edit_document(&stack, |d| LayerOp::AddTop.apply(d)).unwrap();
+        assert!(!coverage(&added, 0) && coverage(&added, 1));
+        assert_eq!(added.layers.len(), stack.layers.len() + 1);
+        let removed = maps::edit_document(&stack, |d| LayerOp::Remove(0).apply(d)).unwrap();
+        assert!(!coverage(&removed, 0));
+    }
 
     /// What the coverage editor writes reads back as what it edited, and "none" removes it.
     #[test]
