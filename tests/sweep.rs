@@ -439,3 +439,36 @@ fn a_suite_counts_studies_lit_differently_each_under_its_own_lights() {
     // The sun's loop runs only in the lit study's pipeline.
     assert!(lit > dark + 50.0, "lit {lit} against dark {dark}");
 }
+
+/// On lavapipe pinned to one thread, the tables are built first in a child process on every
+/// core, into the cache the run then reads.
+#[test]
+fn a_pinned_lavapipe_run_builds_its_tables_first_on_every_core() {
+    let dir = common::scratch_dir("sweep-prebuild");
+    let cache = dir.join("cache");
+    std::fs::write(
+        dir.join("tir.toml"),
+        "materials = [\"varnished-gold\"]\nsize = \"16x16\"\nframes = 1\nwarmup = 0\n\
+         [[axis]]\nname = \"tir\"\nvalues = [\"lut32\"]\n",
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_lamina"))
+        .args(["--validation", "sweep", "tir.toml", "--out", "res"])
+        .current_dir(&dir)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .env("LP_NUM_THREADS", "0")
+        .env("LAMINA_CACHE", &cache)
+        .output()
+        .unwrap();
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{stdout}\n{}", text(&out.stderr));
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if cores > 1 {
+        assert!(stdout.contains("tables on every core"), "{stdout}");
+    }
+    let tables: Vec<String> = std::fs::read_dir(cache.join("tables"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(tables.iter().any(|t| t.starts_with("tir")), "{tables:?}");
+}

@@ -19,6 +19,7 @@ mod report;
 mod sheet;
 mod simplify;
 mod sweep;
+mod table_worker;
 mod tables;
 mod view;
 
@@ -92,6 +93,10 @@ enum Command {
     /// `--counter instructions`.
     #[command(hide = true)]
     CountWorker(count_worker::CountWorkerArgs),
+    /// Builds the tables of some variants into the disk cache on every core; started by
+    /// `sweep` on lavapipe pinned to one thread.
+    #[command(hide = true)]
+    TableWorker(table_worker::TableWorkerArgs),
 }
 
 /// Runs the command the line names.
@@ -112,6 +117,7 @@ pub fn run(cli: &Cli) -> Result<()> {
         Command::Diff(args) => diff::run(args),
         Command::Tables(args) => tables::run(global, args),
         Command::CountWorker(args) => count_worker::run(global, args),
+        Command::TableWorker(args) => table_worker::run(global, args),
     }
 }
 

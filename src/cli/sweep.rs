@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use lamina::imageio;
 use lamina::profile::counter::CounterSetup;
-use lamina::profile::{report, sweep};
+use lamina::profile::{prebuild, report, sweep};
 
 use super::args::{CounterArg, EnvArg};
 use super::{asset_path, check_validation, progress_bar, studies, GlobalArgs};
@@ -68,6 +68,24 @@ pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
         None
     };
     let started = std::time::Instant::now();
+    if prebuild::worthwhile(&gpu) {
+        let variants = prebuild::table_variants(
+            list.iter()
+                .flat_map(|s| s.points.iter().map(|p| p.case.variant)),
+        );
+        let exe = std::env::current_exe().context("locating the lamina executable")?;
+        let mut worker_args = vec!["--device".to_owned(), gpu.device.report.name.clone()];
+        if global.validation {
+            worker_args.push("--validation".to_owned());
+        }
+        match prebuild::run(&exe, &worker_args, &variants) {
+            Ok(took) => println!(
+                "  built or loaded the tables on every core in {:.1} s",
+                took.as_secs_f64()
+            ),
+            Err(e) => eprintln!("warning: {e}; the studies build their tables themselves"),
+        }
+    }
     // Every study timed first, then all the counts in one pool of workers (each worker starts
     // once and compiles each shader under valgrind once for the whole suite).
     let mut timed = Vec::with_capacity(list.len());

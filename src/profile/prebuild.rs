@@ -1,0 +1,92 @@
+//! Tables built before a run on lavapipe pinned to one thread. `LP_NUM_THREADS=0` keeps
+//! lavapipe's timings steady, but it also runs lavapipe's compute dispatches — the table
+//! builds, a cold run's largest cost after the counting (the FGD study's 64⁴ grid: about
+//! 100 s) — on one core. The tables a run's variants sample are built first by
+//! `lamina table-worker`, a child process with lavapipe's default thread count (one per core),
+//! into the disk cache (`tables::cache`) that the run then reads.
+
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use crate::error::{Error, Result};
+use crate::gpu::Gpu;
+use crate::variant::VariantKey;
+
+/// Whether a prebuild helps: a CPU device (lavapipe) held by `LP_NUM_THREADS` to fewer
+/// threads than the machine has cores, and a disk cache to build into.
+pub fn worthwhile(gpu: &Gpu) -> bool {
+    let cpu = gpu.device.report.device_type.eq_ignore_ascii_case("cpu");
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads = std::env::var("LP_NUM_THREADS")
+        .ok()
+        .and_then(|v| v.trim().parse::<usize>().ok());
+    cpu && threads.is_some_and(|t| t.max(1) < cores) && crate::tables::cache::dir().is_some()
+}
+
+/// One variant per set of tables among `variants`: the FGD table, the G2 form and the TIR
+/// mode decide them (`render::inputs::ShadingInputs::prepare`).
+pub fn table_variants(variants: impl IntoIterator<Item = VariantKey>) -> Vec<VariantKey> {
+    let mut chosen: Vec<VariantKey> = Vec::new();
+    for v in variants {
+        if !chosen
+            .iter()
+            .any(|c| (c.fgd, c.g2, c.tir) == (v.fgd, v.g2, v.tir))
+        {
+            chosen.push(v);
+        }
+    }
+    chosen
+}
+
+/// Runs `exe table-worker` for `variants` with lavapipe's default thread count,
+/// `global_args` (device, validation) before the subcommand; returns how long it took.
+pub fn run(exe: &Path, global_args: &[String], variants: &[VariantKey]) -> Result<Duration> {
+    let started = Instant::now();
+    let mut command = Command::new(exe);
+    command
+        .args(global_args)
+        .arg("table-worker")
+        .env_remove("LP_NUM_THREADS");
+    for v in variants {
+        command.arg("--variant").arg(v.to_string());
+    }
+    let out = command
+        .output()
+        .map_err(|e| Error::Unsupported(format!("starting the table worker: {e}")))?;
+    if !out.status.success() {
+        return Err(Error::Unsupported(format!(
+            "the table worker failed ({}): {}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr).trim()
+        )));
+    }
+    Ok(started.elapsed())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_variant_per_set_of_tables() {
+        let key = |s: &str| s.parse::<VariantKey>().unwrap();
+        let chosen = table_variants([
+            key("model=tm2,fgd=4d"),
+            key("model=tm6,fgd=4d,max_layers=8"),
+            key("model=tm2,fgd=4d,g2=earl"),
+            key("model=tm2,tir=lut32"),
+            key("model=ggx"),
+            key("model=tm2"),
+        ]);
+        assert_eq!(
+            chosen,
+            vec![
+                key("model=tm2,fgd=4d"),
+                key("model=tm2,fgd=4d,g2=earl"),
+                key("model=tm2,tir=lut32"),
+                key("model=ggx"),
+            ]
+        );
+    }
+}
