@@ -24,8 +24,11 @@ pub struct EvalSample {
 #[derive(Debug, Serialize)]
 pub struct EvalLobe {
     pub weight: [f64; 3],
-    /// GGX α of the lobe.
+    /// GGX α of the lobe (1 for a diffuse base's lobe, which has none).
     pub roughness: f64,
+    /// `true` for a diffuse base's Lambertian lobe; absent otherwise.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub diffuse: bool,
 }
 
 impl EvalSample {
@@ -40,6 +43,7 @@ impl EvalSample {
                 .map(|l| EvalLobe {
                     weight: l.weight,
                     roughness: l.roughness,
+                    diffuse: l.diffuse,
                 })
                 .collect(),
         }
@@ -62,11 +66,12 @@ impl EvalReport {
                 rgb(s.transmittance)
             );
             for (k, l) in s.lobes.iter().enumerate() {
-                out += &format!(
-                    "    lobe {k:>2}: weight {}   α {:.4}\n",
-                    rgb(l.weight),
-                    l.roughness
-                );
+                let shape = if l.diffuse {
+                    "diffuse (Lambertian)".to_owned()
+                } else {
+                    format!("α {:.4}", l.roughness)
+                };
+                out += &format!("    lobe {k:>2}: weight {}   {shape}\n", rgb(l.weight));
             }
         }
         out

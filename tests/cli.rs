@@ -883,3 +883,34 @@ fn output_into_a_closed_pipe_ends_quietly() {
 fn libc_sigpipe() -> i32 {
     13
 }
+
+/// `eval` names a diffuse base's lobe as such, in text and JSON, on both backends.
+#[test]
+fn eval_names_the_diffuse_lobe() {
+    let dir = common::scratch_dir("eval-diffuse");
+    for backend in ["cpu", "gpu"] {
+        let args = [
+            "eval",
+            "--material",
+            "glazed-ceramic",
+            "--cos",
+            "0.7",
+            "--backend",
+            backend,
+        ];
+        let out = lamina(&args, &dir);
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{backend}: {}", stderr(&out));
+        let last = text.lines().last().unwrap();
+        assert!(last.contains("diffuse (Lambertian)"), "{backend}: {text}");
+        assert!(!last.contains('α'), "{backend}: {text}");
+        let mut json_args = args.to_vec();
+        json_args.push("--json");
+        let out = lamina(&json_args, &dir);
+        let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let lobes = json["samples"][0]["lobes"].as_array().unwrap();
+        let (base, coats) = lobes.split_last().unwrap();
+        assert_eq!(base["diffuse"], true, "{backend}: {json}");
+        assert!(coats.iter().all(|l| l.get("diffuse").is_none()), "{json}");
+    }
+}
