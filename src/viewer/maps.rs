@@ -156,11 +156,12 @@ fn constant_value(field: Field, layer: &LayerParams) -> Value {
 /// A noise pattern over a range around the field's constant in `layer`, inside the field's
 /// own range.
 fn default_source(field: Field, layer: &LayerParams) -> Table {
+    // An RGB field's range: its constant scaled down and up, or [0, empty] where it is 0.
     let scaled = |c: [f64; 3], low: f64, high: f64, empty: f64| {
         if c.iter().all(|&x| x == 0.0) {
-            ([0.0; 3], [empty; 3])
+            (rgb([0.0; 3]), rgb([empty; 3]))
         } else {
-            (c.map(|x| x * low), c.map(|x| x * high))
+            (rgb(c.map(|x| x * low)), rgb(c.map(|x| x * high)))
         }
     };
     let (low, high): (Value, Value) = match field {
@@ -171,14 +172,8 @@ fn default_source(field: Field, layer: &LayerParams) -> Table {
                 Value::Float(rounded((r * 2.0 + 0.05).min(1.0))),
             )
         }
-        Field::Ior => {
-            let (l, h) = scaled(layer.ior, 0.95, 1.05, 1.5);
-            (rgb(l), rgb(h))
-        }
-        Field::Kappa => {
-            let (l, h) = scaled(layer.kappa, 0.8, 1.2, 1.0);
-            (rgb(l), rgb(h))
-        }
+        Field::Ior => scaled(layer.ior, 0.95, 1.05, 1.5),
+        Field::Kappa => scaled(layer.kappa, 0.8, 1.2, 1.0),
         Field::Depth => {
             let d = layer.depth;
             let (l, h) = if d == 0.0 {
@@ -188,14 +183,8 @@ fn default_source(field: Field, layer: &LayerParams) -> Table {
             };
             (Value::Float(rounded(l)), Value::Float(rounded(h)))
         }
-        Field::SigmaS => {
-            let (l, h) = scaled(layer.sigma_s, 0.5, 1.5, 1.0);
-            (rgb(l), rgb(h))
-        }
-        Field::SigmaA => {
-            let (l, h) = scaled(layer.sigma_a, 0.5, 1.5, 1.0);
-            (rgb(l), rgb(h))
-        }
+        Field::SigmaS => scaled(layer.sigma_s, 0.5, 1.5, 1.0),
+        Field::SigmaA => scaled(layer.sigma_a, 0.5, 1.5, 1.0),
         Field::G => (
             Value::Float(rounded((layer.g - 0.2).max(-0.95))),
             Value::Float(rounded((layer.g + 0.2).min(0.95))),
@@ -244,11 +233,15 @@ fn as_pattern(table: &Table, kind: &str) -> Table {
         }
     }
     if kind == "checker" {
-        // A checker tiles with an even scale.
-        let scale = t.get("scale").and_then(Value::as_integer).unwrap_or(4);
-        t.insert("scale".into(), Value::Integer(scale + scale % 2));
+        even_scale(&mut t);
     }
     t
+}
+
+/// A checker tiles with an even scale: an odd one is raised to the next.
+fn even_scale(t: &mut Table) {
+    let scale = t.get("scale").and_then(Value::as_integer).unwrap_or(4);
+    t.insert("scale".into(), Value::Integer(scale + scale % 2));
 }
 
 /// `table` reading the texture `path` (linear data; the red channel for a scalar field).
@@ -330,8 +323,7 @@ pub fn maps_editor(
                 } else {
                     integer_control(ui, &mut t, "scale", (1, i64::from(MAX_SCALE)), 4);
                     if kind == "checker" {
-                        let s = t.get("scale").and_then(Value::as_integer).unwrap_or(4);
-                        t.insert("scale".into(), Value::Integer(s + s % 2));
+                        even_scale(&mut t);
                     } else {
                         integer_control(ui, &mut t, "seed", (0, 9999), 0);
                     }
