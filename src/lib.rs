@@ -11,6 +11,7 @@
 //! - [`render`] — passes (sky, shaded sphere), the scene and readback;
 //! - [`model`] — the CPU reference in f64;
 //! - [`oracle`] — the CPU reference for a variant (`eval --backend cpu` and `exact`, the furnace);
+//! - [`reference`] — the stochastic reference: light paths through the stack (`lamina reference`);
 //! - [`material`] — layer stacks, and the variant a stack is shaded with;
 //! - [`imageio`] — EXR/PNG input and atomic output;
 //! - [`size`] — `WxH` image sizes, one limit for the command line and the sweep files;
@@ -30,6 +31,7 @@ pub mod oracle;
 pub mod output;
 pub mod pipeline_cache;
 pub mod profile;
+pub mod reference;
 pub mod render;
 pub mod shader;
 pub mod size;

@@ -14,6 +14,7 @@ mod devices;
 mod diff;
 mod eval;
 mod furnace;
+mod reference;
 mod render;
 mod report;
 mod sheet;
@@ -66,6 +67,9 @@ enum Command {
     Render(render::RenderArgs),
     /// Evaluate a material's model at view cosines: total R, T and the lobes.
     Eval(eval::EvalArgs),
+    /// Stochastic reference of a material: light paths through the stack, total R and T with
+    /// standard errors, the BRDF in the plane of incidence and over the hemisphere.
+    Reference(reference::ReferenceArgs),
     /// White-furnace test: reflected energy per view angle under a uniform white environment.
     Furnace(furnace::FurnaceArgs),
     /// What static simplification removes from a material (index-matched layers, empty media,
@@ -106,6 +110,7 @@ pub fn run(cli: &Cli) -> Result<()> {
         Command::Devices => devices::run(global),
         Command::Render(args) => render::run(global, args),
         Command::Eval(args) => eval::run(global, args),
+        Command::Reference(args) => reference::run(args),
         Command::Furnace(args) => furnace::run(global, args),
         Command::BakeError(args) => bake_error::run(global, args),
         Command::Simplify(args) => simplify::run(args),

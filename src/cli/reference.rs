@@ -1,0 +1,191 @@
+//! `lamina reference`: the stochastic reference of a material (total R and T with standard
+//! errors, the BRDF in the plane of incidence and over the hemisphere), on every core, with a
+//! progress bar; Ctrl-C stops it without writing anything.
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use lamina::imageio::write_file_atomically;
+use lamina::material::Stack;
+use lamina::reference::{self, Reference, Settings};
+use lamina::variant::{Axis, Model, G2};
+use serde::Serialize;
+
+#[derive(clap::Args)]
+pub struct ReferenceArgs {
+    /// Material file or preset name (see assets/materials/).
+    #[arg(long, value_name = "FILE|PRESET")]
+    material: String,
+    /// View cosines, comma-separated, each in (0, 1].
+    #[arg(
+        long = "cos",
+        value_name = "LIST",
+        value_delimiter = ',',
+        required = true
+    )]
+    cosines: Vec<f64>,
+    /// Light paths per channel and view cosine (standard errors fall as 1/√N).
+    #[arg(long, value_name = "N", default_value_t = 1_000_000)]
+    paths: u64,
+    /// Seed of the paths: the same seed gives the same numbers on any number of threads.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Masking form of the interfaces' reflections (the model's FGD's; the variant axis g2).
+    #[arg(long, value_name = "FORM", default_value = "height-correlated")]
+    g2: String,
+    /// Print the JSON (with the slice and hemisphere bins) instead of a table.
+    #[arg(long)]
+    json: bool,
+    /// Also write the JSON to this file (atomically: all of it or nothing).
+    #[arg(long, value_name = "FILE.json")]
+    out: Option<PathBuf>,
+}
+
+/// The JSON `--json` prints and `--out` writes.
+#[derive(Serialize)]
+struct ReferenceReport<'a> {
+    material: &'a str,
+    model: String,
+    g2: String,
+    paths: u64,
+    seed: u64,
+    /// Centres of the plane-of-incidence bins, signed θ_o in degrees (positive: mirror side).
+    slice_theta_deg: Vec<f64>,
+    slice_azimuth_half_width_deg: f64,
+    hemisphere_rings: usize,
+    hemisphere_sectors: usize,
+    samples: &'a [Reference],
+}
+
+/// Set by Ctrl-C: the run stops at its next batch of paths.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+extern "C" fn on_interrupt(_: libc::c_int) {
+    INTERRUPTED.store(true, Ordering::Relaxed);
+    // SAFETY: signal() is async-signal-safe; a second Ctrl-C then ends the process at once.
+    unsafe {
+        libc::signal(libc::SIGINT, libc::SIG_DFL);
+    }
+}
+
+/// Routes Ctrl-C to [`INTERRUPTED`].
+fn stop_on_interrupt() {
+    // SAFETY: `on_interrupt` only stores an atomic and calls signal(), both async-signal-safe;
+    // the handler is a valid `extern "C" fn(c_int)` for the process's lifetime.
+    unsafe {
+        libc::signal(
+            libc::SIGINT,
+            on_interrupt as extern "C" fn(libc::c_int) as libc::sighandler_t,
+        );
+    }
+}
+
+pub fn run(args: &ReferenceArgs) -> Result<()> {
+    let stack = Stack::resolve(&args.material)?;
+    stack.require_uniform("`lamina reference`")?;
+    if let Some(c) = args
+        .cosines
+        .iter()
+        .find(|c| !(c.is_finite() && **c > 0.0 && **c <= 1.0))
+    {
+        anyhow::bail!("--cos: {c} is not a view cosine; each must be in (0, 1]");
+    }
+    let g2 = G2::parse_value(&args.g2).context("--g2")?;
+    let settings = Settings {
+        paths: args.paths,
+        seed: args.seed,
+        g2,
+        media: stack.model == Model::Tm6,
+    };
+    settings.check()?;
+    let layers = stack.params();
+    let bar = ProgressBar::new(args.paths * args.cosines.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{prefix:>12} [{bar:30}] {human_pos}/{human_len} paths per channel ({elapsed}, ETA {eta})",
+        )
+        .expect("a valid template")
+        .progress_chars("=> "),
+    );
+    bar.set_prefix("reference");
+    stop_on_interrupt();
+    let done = AtomicU64::new(0);
+    let mut samples = Vec::with_capacity(args.cosines.len());
+    for &mu in &args.cosines {
+        let before = done.load(Ordering::Relaxed);
+        let progress = |paths: u64| {
+            bar.set_position(before + paths);
+        };
+        let result = reference::simulate(&layers, &settings, mu, &progress, &INTERRUPTED)?;
+        let Some(result) = result else {
+            bar.abandon();
+            anyhow::bail!(
+                "interrupted after {} of {} paths per channel; nothing was written",
+                bar.position(),
+                bar.length().unwrap_or(0)
+            );
+        };
+        done.store(before + args.paths, Ordering::Relaxed);
+        samples.push(result);
+    }
+    bar.finish_and_clear();
+    let report = ReferenceReport {
+        material: &stack.name,
+        model: stack.model.to_string(),
+        g2: g2.to_string(),
+        paths: args.paths,
+        seed: args.seed,
+        slice_theta_deg: (0..reference::SLICE_BINS)
+            .map(|i| {
+                let (a, b) = reference::slice_bin_edges(i);
+                (0.5 * (a + b)).to_degrees()
+            })
+            .collect(),
+        slice_azimuth_half_width_deg: reference::SLICE_HALF_WIDTH_DEG,
+        hemisphere_rings: reference::HEMISPHERE_RINGS,
+        hemisphere_sectors: reference::HEMISPHERE_SECTORS,
+        samples: &samples,
+    };
+    let json = serde_json::to_string_pretty(&report)?;
+    if let Some(path) = &args.out {
+        write_file_atomically(path, format!("{json}\n"))?;
+    }
+    if args.json {
+        println!("{json}");
+    } else {
+        print!("{}", table(&stack.name, &samples));
+    }
+    Ok(())
+}
+
+/// R and T per view cosine with their standard errors.
+fn table(name: &str, samples: &[Reference]) -> String {
+    let mut out = format!("{name}: stochastic reference\n");
+    let rgb = |e: &reference::Estimate| {
+        (0..3)
+            .map(|c| format!("{:.4}±{:.4}", e.mean[c], e.std_error[c]))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    for s in samples {
+        out.push_str(&format!(
+            "cos θ {:.3} ({} paths per channel)\n  R  {}\n  T  {}\n",
+            s.cos_theta,
+            s.paths,
+            rgb(&s.reflectance),
+            rgb(&s.transmittance)
+        ));
+        if s.unresolved.iter().any(|&u| u > 0.0) {
+            out.push_str(&format!(
+                "  unresolved (paths past {} events) {:.2e} {:.2e} {:.2e}\n",
+                reference::walk::MAX_EVENTS,
+                s.unresolved[0],
+                s.unresolved[1],
+                s.unresolved[2]
+            ));
+        }
+    }
+    out
+}

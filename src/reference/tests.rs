@@ -1,0 +1,271 @@
+//! The reference against exact answers: Fresnel, the adding equations of smooth coats,
+//! Beer–Lambert, energy conservation, the FGD of a single rough interface and the closed form
+//! of a smooth coat over a Lambertian base. Every bound is a number of standard errors the
+//! run itself reports (4σ: a correct walk fails one check in about 16 000), plus the
+//! quadrature error of the exact side where it has one.
+
+use std::sync::atomic::AtomicBool;
+
+use super::*;
+use crate::model::fgd::ExactFgd;
+use crate::model::{diffuse, fresnel, Fgd};
+
+fn coat(ior: f64, roughness: f64) -> LayerParams {
+    LayerParams {
+        ior: [ior; 3],
+        kappa: [0.0; 3],
+        roughness,
+        depth: 0.0,
+        sigma_s: [0.0; 3],
+        sigma_a: [0.0; 3],
+        g: 0.0,
+        diffuse: None,
+    }
+}
+
+fn gold(roughness: f64) -> LayerParams {
+    LayerParams {
+        ior: [0.143245, 0.377423, 1.43919],
+        kappa: [3.98479, 2.3847, 1.60434],
+        ..coat(1.0, roughness)
+    }
+}
+
+fn run(layers: &[LayerParams], media: bool, g2: G2, mu: f64, paths: u64) -> Reference {
+    let settings = Settings {
+        paths,
+        seed: 0x5eed,
+        g2,
+        media,
+    };
+    simulate(layers, &settings, mu, &|_| {}, &AtomicBool::new(false))
+        .expect("valid settings")
+        .expect("not stopped")
+}
+
+/// |estimate − exact| ≤ 4 standard errors + `slack` in every channel.
+fn agrees(what: &str, estimate: &Estimate, exact: [f64; 3], slack: f64) {
+    for (c, exact) in exact.iter().enumerate() {
+        let (got, se) = (estimate.mean[c], estimate.std_error[c]);
+        assert!(
+            (got - exact).abs() <= 4.0 * se + slack,
+            "{what}, channel {c}: {got} ± {se} against {exact}"
+        );
+    }
+}
+
+/// Cosine of the refracted direction for incidence cosine μ into relative IOR η > 1.
+fn refracted(mu: f64, eta: f64) -> f64 {
+    (1.0 - (1.0 - mu * mu) / (eta * eta)).sqrt()
+}
+
+#[test]
+fn a_smooth_interface_reflects_fresnel() {
+    for mu in [1.0, 0.5, 0.15] {
+        let r = run(&[coat(1.5, 0.0)], false, G2::Smith, mu, 20_000);
+        let f = fresnel::dielectric(mu, 1.5);
+        agrees("R", &r.reflectance, [f; 3], 0.0);
+        agrees("T", &r.transmittance, [1.0 - f; 3], 0.0);
+    }
+}
+
+#[test]
+fn smooth_coats_over_a_conductor_follow_the_adding_equations() {
+    // Two smooth coats (1.5, then 2.0) over smooth gold: add from the bottom up, with the
+    // symmetric Fresnel of each interface at its pair of angles.
+    let stack = [coat(1.5, 0.0), coat(2.0, 0.0), gold(0.0)];
+    let gold_ior = stack[2].ior;
+    let gold_kappa = stack[2].kappa;
+    for mu in [0.9, 0.35] {
+        let mu1 = refracted(mu, 1.5);
+        let mu2 = refracted(mu1, 2.0 / 1.5);
+        let exact = std::array::from_fn(|c| {
+            let base = fresnel::conductor(mu2, gold_ior[c] / 2.0, gold_kappa[c] / 2.0);
+            let r1 = fresnel::dielectric(mu1, 2.0 / 1.5);
+            let below = r1 + (1.0 - r1).powi(2) * base / (1.0 - r1 * base);
+            let r0 = fresnel::dielectric(mu, 1.5);
+            r0 + (1.0 - r0).powi(2) * below / (1.0 - r0 * below)
+        });
+        let r = run(&stack, false, G2::Smith, mu, 20_000);
+        agrees("R", &r.reflectance, exact, 0.0);
+        assert_eq!(r.transmittance.mean, [0.0; 3]);
+    }
+}
+
+#[test]
+fn an_absorbing_medium_follows_beer_lambert() {
+    let film = LayerParams {
+        depth: 0.5,
+        sigma_a: [0.2, 1.0, 3.0],
+        ..coat(1.5, 0.0)
+    };
+    for mu in [1.0, 0.3] {
+        let f = fresnel::dielectric(mu, 1.5);
+        let mu_t = refracted(mu, 1.5);
+        let r = run(&[film], true, G2::Smith, mu, 20_000);
+        agrees("R", &r.reflectance, [f; 3], 0.0);
+        let exact = film
+            .sigma_a
+            .map(|s| (1.0 - f) * (-s * film.depth / mu_t).exp());
+        agrees("T", &r.transmittance, exact, 0.0);
+        // Over gold, light crosses the film twice per round trip.
+        let over_gold = [film, gold(0.0)];
+        let exact = std::array::from_fn(|c| {
+            let a2 = (-2.0 * film.sigma_a[c] * film.depth / mu_t).exp();
+            let base = fresnel::conductor(mu_t, gold(0.0).ior[c] / 1.5, gold(0.0).kappa[c] / 1.5);
+            f + (1.0 - f).powi(2) * base * a2 / (1.0 - f * base * a2)
+        });
+        let r = run(&over_gold, true, G2::Smith, mu, 20_000);
+        agrees("R over gold", &r.reflectance, exact, 0.0);
+    }
+}
+
+#[test]
+fn a_smooth_lossless_slab_conserves_energy() {
+    // Smooth interfaces and media that scatter without absorbing lose nothing: every path
+    // leaves above or below, so R + T + unresolved is 1 up to rounding.
+    let stack = [
+        LayerParams {
+            depth: 1.0,
+            sigma_s: [2.0, 0.5, 8.0],
+            g: 0.6,
+            ..coat(1.5, 0.0)
+        },
+        LayerParams {
+            depth: 0.5,
+            sigma_s: [1.0; 3],
+            g: -0.3,
+            ..coat(1.3, 0.0)
+        },
+    ];
+    for mu in [1.0, 0.4, 0.05] {
+        let r = run(&stack, true, G2::Smith, mu, 5_000);
+        for c in 0..3 {
+            let sum = r.reflectance.mean[c] + r.transmittance.mean[c] + r.unresolved[c];
+            assert!(
+                (sum - 1.0).abs() < 1e-9,
+                "μ {mu}, channel {c}: R + T = {sum}"
+            );
+        }
+        // The media do scatter light back: more than the top interface's Fresnel alone.
+        assert!(r.reflectance.mean[2] > fresnel::dielectric(mu, 1.5) + 0.05);
+    }
+}
+
+#[test]
+fn a_rough_interface_reflects_its_fgd() {
+    for g2 in [G2::HeightCorrelated, G2::Smith] {
+        let fgd = ExactFgd::new(g2);
+        for (mu, alpha) in [(0.9, 0.3), (0.3, 0.6)] {
+            let r = run(&[gold(alpha)], false, g2, mu, 20_000);
+            let exact =
+                std::array::from_fn(|c| fgd.fgd(mu, alpha, gold(0.0).ior[c], gold(0.0).kappa[c]));
+            // ExactFgd's midpoint rule is good to 1e-3 (model::fgd).
+            agrees("conductor R", &r.reflectance, exact, 1e-3);
+            let r = run(&[coat(1.5, alpha)], false, g2, mu, 20_000);
+            let exact = fgd.fgd(mu, alpha, 1.5, 0.0);
+            agrees("dielectric R", &r.reflectance, [exact; 3], 1e-3);
+            // Single scattering loses light through the rough interface: R + T < 1.
+            let lost = 1.0 - r.reflectance.mean[0] - r.transmittance.mean[0];
+            assert!(
+                lost > 4.0 * r.transmittance.std_error[0],
+                "{g2:?} μ {mu}: {lost}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_smooth_coat_over_a_lambertian_base_is_the_closed_form() {
+    let n = 1.5;
+    let rho = [0.2, 0.5, 0.9];
+    let base = LayerParams {
+        diffuse: Some(rho),
+        ..coat(1.0, 0.0)
+    };
+    // Light leaving the base escapes unless the coat reflects it; inside, the coat reflects
+    // 1 − (1 − F̄)/n² of a diffuse flux (F̄: its hemispherical average from outside).
+    let inside = 1.0 - (1.0 - diffuse::fresnel_hemispherical(n)) / (n * n);
+    for mu in [1.0, 0.5, 0.1] {
+        let f = fresnel::dielectric(mu, n);
+        let exact = rho.map(|p| f + (1.0 - f) * p * (1.0 - inside) / (1.0 - p * inside));
+        let r = run(&[coat(n, 0.0), base], false, G2::Smith, mu, 20_000);
+        agrees("R", &r.reflectance, exact, 1e-4);
+    }
+}
+
+#[test]
+fn the_slice_and_the_hemisphere_hold_the_reflected_energy() {
+    // Σ BRDF · projected solid angle over the hemisphere is R; a glossy conductor's slice
+    // peaks at the mirror direction (within a bin: a rough lobe's peak moves off-specular).
+    let r = run(&[gold(0.1)], false, G2::HeightCorrelated, 0.7, 20_000);
+    for c in 0..3 {
+        let sum: f64 = r
+            .hemisphere
+            .iter()
+            .map(|e| e.mean[c] * hemisphere_projected_solid_angle())
+            .sum();
+        assert!((sum - r.reflectance.mean[c]).abs() < 1e-9);
+    }
+    let peak = (0..SLICE_BINS)
+        .max_by(|&a, &b| r.slice[a].mean[0].total_cmp(&r.slice[b].mean[0]))
+        .expect("bins");
+    let (lo, hi) = slice_bin_edges(peak);
+    let mirror = 0.7_f64.acos();
+    let step = hi - lo;
+    assert!(
+        lo - step <= mirror && mirror <= hi + step,
+        "peak at [{lo}, {hi}]"
+    );
+}
+
+#[test]
+fn a_seed_gives_the_same_numbers_on_any_number_of_threads() {
+    let stack = [
+        LayerParams {
+            depth: 0.3,
+            sigma_s: [1.0, 2.0, 3.0],
+            sigma_a: [0.1; 3],
+            g: 0.5,
+            ..coat(1.5, 0.2)
+        },
+        gold(0.4),
+    ];
+    let on = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a pool")
+            .install(|| run(&stack, true, G2::HeightCorrelated, 0.6, 3_000))
+    };
+    assert_eq!(on(1), on(2));
+}
+
+#[test]
+fn settings_out_of_range_are_refused() {
+    let stop = AtomicBool::new(false);
+    for paths in [0, MAX_PATHS + 1] {
+        let settings = Settings {
+            paths,
+            seed: 1,
+            g2: G2::Smith,
+            media: false,
+        };
+        let err = simulate(&[gold(0.1)], &settings, 0.5, &|_| {}, &stop).unwrap_err();
+        assert!(err.to_string().contains("--paths"), "{err}");
+    }
+    let settings = Settings {
+        paths: 10,
+        seed: 1,
+        g2: G2::Smith,
+        media: false,
+    };
+    for mu in [0.0, 1.5, f64::NAN] {
+        assert!(simulate(&[gold(0.1)], &settings, mu, &|_| {}, &stop).is_err());
+    }
+    // A stop before the first batch returns nothing.
+    let stopped = AtomicBool::new(true);
+    assert!(simulate(&[gold(0.1)], &settings, 0.5, &|_| {}, &stopped)
+        .unwrap()
+        .is_none());
+}
