@@ -184,7 +184,8 @@ fn furnace(
         _ => tm2::evaluate(layers, mu, &fgd, tir.as_ref()),
     };
     let plain = evaluator.evaluate_lobes(layers, &[mu]).unwrap().remove(0);
-    let retro = plain.retro_mask;
+    let retro = plain.evaluation.retro_mask;
+    assert_eq!(oracle.retro_mask, retro, "the CPU model's lobe kinds");
     let shading = LightShading {
         g2: variant.g2,
         ndf: variant.ndf,

@@ -278,6 +278,39 @@ fn bad_sweep_files_are_refused_before_any_gpu_work() {
     let e = load_error("suite", "studies = [\"missing.toml\"]\n");
     assert!(e.contains("missing.toml"), "{e}");
 
+    let reference = "materials = [\"gold\"]\n[reference]\n";
+    for (body, words) in [
+        (
+            "cosines = [0.0]\npaths = 10\n",
+            vec!["reference.cosines", "(0, 1]"],
+        ),
+        (
+            "cosines = []\npaths = 10\n",
+            vec!["reference.cosines", "empty"],
+        ),
+        (
+            "cosines = [0.5]\npaths = 0\n",
+            vec!["reference.paths", "1 to"],
+        ),
+        ("cosines = [0.5]\n", vec!["paths"]),
+    ] {
+        let e = load_error("reference", &format!("{reference}{body}"));
+        for w in words {
+            assert!(e.contains(w), "{body}: `{w}` missing from {e}");
+        }
+    }
+    let e = load_error(
+        "reference-axis",
+        "materials = [\"gold\"]\n[[axis]]\nname = \"g2\"\nvalues = [\"smith\"]\n\
+         [reference]\ncosines = [1.0]\npaths = 10\n",
+    );
+    assert!(e.contains("`reference`") && e.contains("not `axis`"), "{e}");
+    let e = load_error(
+        "reference-ggx",
+        &format!("base = \"model=ggx\"\n{reference}cosines = [1.0]\npaths = 10\n"),
+    );
+    assert!(e.contains("model=ggx is not a layered model"), "{e}");
+
     // Through the command line: exit status 1, the file and field named, no output written.
     let dir = common::scratch_dir("sweep-bad-cli");
     std::fs::write(
@@ -296,6 +329,66 @@ fn bad_sweep_files_are_refused_before_any_gpu_work() {
     assert!(!dir.join("res").exists());
 }
 
+/// A `[reference]` study: each material's model against the stochastic reference, in the
+/// study's JSON, its charts and the report's table; nothing timed or counted.
+#[test]
+fn a_reference_study_compares_each_material_with_the_reference() {
+    let dir = common::scratch_dir("sweep-reference");
+    std::fs::write(
+        dir.join("ref.toml"),
+        "name = \"ref\"\nmaterials = [\"gold\", \"dusty-varnish\"]\ncounter = \"instructions\"\n\
+         [reference]\ncosines = [1.0, 0.4]\npaths = 2000\n",
+    )
+    .unwrap();
+    let out = lamina(&["--validation", "sweep", "ref.toml", "--out", "res"], &dir);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("res/study.json")).unwrap())
+            .unwrap();
+    let compared = meta["reference"].as_array().unwrap();
+    assert_eq!(compared.len(), 2);
+    assert_eq!(compared[1]["model"], "tm6");
+    for m in compared {
+        assert_eq!(m["rows"].as_array().unwrap().len(), 2);
+        assert_eq!(m["rows"][0]["slice_model"].as_array().unwrap().len(), 90);
+    }
+    // Gold alone: the model's FGD is the reference's single scattering, to its noise.
+    let row = &compared[0]["rows"][0];
+    for c in 0..3 {
+        let (r, se) = (
+            row["reference"]["mean"][c].as_f64().unwrap(),
+            row["reference"]["std_error"][c].as_f64().unwrap(),
+        );
+        let m = row["model"][c].as_f64().unwrap();
+        assert!(
+            (m - r).abs() <= 4.0 * se + 1e-3,
+            "channel {c}: {m} vs {r} ± {se}"
+        );
+    }
+    let results: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("res/results.json")).unwrap())
+            .unwrap();
+    assert!(results["runs"].as_array().unwrap().is_empty());
+    for chart in ["reference-gold", "reference-dusty-varnish"] {
+        assert!(dir.join(format!("res/{chart}.png")).is_file(), "{chart}");
+        assert!(dir.join(format!("res/{chart}.svg")).is_file(), "{chart}");
+    }
+    assert!(!dir.join("res/chart-time.png").exists());
+    let report = std::fs::read_to_string(dir.join("res/REPORT.md")).unwrap();
+    for expected in [
+        "| material | model | cos θ | reference R | model R | error | without TIR |",
+        "| gold | tm2 | 1.00 |",
+        "| dusty varnish | tm6 | 0.40 |",
+        "of 4 (material, view) points",
+        "](reference-gold.png)",
+    ] {
+        assert!(
+            report.contains(expected),
+            "`{expected}` missing from {report}"
+        );
+    }
+}
+
 #[test]
 fn every_committed_sweep_file_expands() {
     let dir = common::repo_path("profiling/sweeps");
@@ -309,6 +402,12 @@ fn every_committed_sweep_file_expands() {
     // 5 sizes × 5 active counts, less the 4 + 3 + 1 that do not fit (1, 2 and 4 layers).
     assert_eq!(static_size.points.len(), 25 - 8);
     for s in &studies {
+        if let Some(r) = &s.reference {
+            // The model against the stochastic reference: every preset, nothing timed.
+            assert_eq!(r.cases.len(), 13, "{}", s.name);
+            assert!(s.points.is_empty() && s.counter.is_none(), "{}", s.name);
+            continue;
+        }
         // The divergence study keeps its own sizes: the suite's widths are not multiples of
         // its `tile_width`.
         let (size, counted) = if s.name == "divergence" {

@@ -115,10 +115,8 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
     let mut samples = Vec::with_capacity(args.cosines.len());
     for &mu in &args.cosines {
         let before = done.load(Ordering::Relaxed);
-        let progress = |paths: u64| {
-            bar.set_position(before + paths);
-        };
-        let result = reference::simulate(&layers, &settings, mu, &progress, &INTERRUPTED)?;
+        let mut progress = |paths: u64| bar.set_position(before + paths);
+        let result = reference::simulate(&layers, &settings, mu, &mut progress, &INTERRUPTED)?;
         let Some(result) = result else {
             bar.abandon();
             anyhow::bail!(

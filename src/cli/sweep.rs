@@ -53,6 +53,11 @@ pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
     if args.dry_run {
         for s in &list {
             println!("{}:", s.name);
+            if let Some(r) = &s.reference {
+                for c in &r.cases {
+                    println!("  reference | {} | {}", c.variant, c.stack.name);
+                }
+            }
             for p in &s.points {
                 println!("  {} | {}", p.case.variant, p.case.stack.name);
             }
@@ -173,6 +178,18 @@ fn print_plan(args: &SweepArgs, list: &[sweep::Study], dir_of: &dyn Fn(&sweep::S
         studies(list.len())
     );
     for s in list {
+        if let Some(r) = &s.reference {
+            println!(
+                "  {:<22} {} material(s) against the stochastic reference at {} view cosine(s), \
+                 {} paths per channel  -> {}",
+                s.name,
+                r.cases.len(),
+                r.cosines.len(),
+                r.paths,
+                dir_of(s).display()
+            );
+            continue;
+        }
         println!(
             "  {:<22} {:>3} case(s) at {}x{} {}, {}+{} frames{}{}  -> {}",
             s.name,

@@ -95,6 +95,9 @@ pub struct Evaluation {
     /// included). TM6: per component, primary then secondary-forward then secondary-backward,
     /// as the reference emits them.
     pub lobes: Vec<Lobe>,
+    /// Bit k: lobe k is centred on the view rather than its mirror direction (a 6-flux
+    /// secondary-backward lobe, lit around the view; the first 32 lobes).
+    pub retro_mask: u32,
 }
 
 /// Directional albedo of a rough interface: FGD(μ, α, η, κ) = ∫ F·D·G2 / (4μ) dω_o.

@@ -159,6 +159,7 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
         reflectance: r_prev,
         transmittance,
         lobes,
+        retro_mask: 0,
     }
 }
 

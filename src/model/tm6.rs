@@ -97,6 +97,7 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
     let mut cos_i = cos_theta;
     let mut transmittance = [0.0; 3];
     let mut lobes = Vec::new();
+    let mut retro_mask = 0u32;
     for (i, layer) in stack.iter().enumerate() {
         if let Some(rho) = layer.diffuse {
             // A Lambertian base under the layers above (`diffuse`): every flux class that
@@ -224,6 +225,9 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
             let emit = [primary, primary && backward, backward];
             for k in 0..3 {
                 if emit[k] {
+                    if k == 2 && lobes.len() < 32 {
+                        retro_mask |= 1 << lobes.len();
+                    }
                     let g_lobe = avg(map3(|c| {
                         safe_ratio(up_g[k][c] - prev_g[k][c], up[k][c] - prev[k][c])
                     }));
@@ -245,6 +249,7 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
         reflectance: map3(|c| prev[0][c] + prev[1][c] + prev[2][c]),
         transmittance,
         lobes,
+        retro_mask,
     }
 }
 

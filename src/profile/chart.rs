@@ -181,6 +181,146 @@ impl Chart {
     }
 }
 
+/// One series of an [`XyChart`]: `(x, y, low, high)` per point (whiskers where high > low).
+pub struct XySeries {
+    pub label: String,
+    pub points: Vec<(f64, f64, f64, f64)>,
+    /// Joined by a line (a curve), or markers only (samples).
+    pub line: bool,
+    /// Palette index: series sharing one are drawn in one colour.
+    pub colour: usize,
+}
+
+/// A chart with numeric axes: curves against samples (the model's BRDF slice against the
+/// reference's), or cost against error (a Pareto chart).
+pub struct XyChart {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub x_range: (f64, f64),
+    pub series: Vec<XySeries>,
+}
+
+impl XyChart {
+    /// Writes `STEM.png` and `STEM.svg` atomically.
+    pub fn write(&self, stem: &Path) -> Result<()> {
+        let svg_path = stem.with_extension("svg");
+        let mut svg = String::new();
+        {
+            let backend = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT));
+            self.draw(backend.into_drawing_area())
+                .map_err(|e| chart_error(&svg_path, e))?;
+        }
+        crate::imageio::write_file_atomically(&svg_path, &svg)?;
+        let png_path = stem.with_extension("png");
+        let mut canvas = Canvas::new(WIDTH, HEIGHT);
+        {
+            let area = (&mut canvas).into_drawing_area();
+            self.draw(area).map_err(|e| chart_error(&png_path, e))?;
+        }
+        let rgba: Vec<u8> = canvas
+            .rgb
+            .chunks(3)
+            .flat_map(|p| [p[0], p[1], p[2], 255])
+            .collect();
+        crate::imageio::write_png(&png_path, WIDTH as usize, HEIGHT as usize, &rgba)?;
+        Ok(())
+    }
+
+    fn values(&self) -> impl Iterator<Item = f64> + '_ {
+        self.series
+            .iter()
+            .flat_map(|s| s.points.iter().flat_map(|p| [p.1, p.2, p.3]))
+            .filter(|v| v.is_finite() && *v > 0.0)
+    }
+
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, plotters::coord::Shift>,
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        root.fill(&WHITE)?;
+        let top = self.values().fold(0.0f64, f64::max);
+        let bottom = self.values().fold(f64::INFINITY, f64::min);
+        let top = if top > 0.0 { top } else { 1.0 };
+        let mut builder = ChartBuilder::on(&root);
+        builder
+            .caption(&self.title, ("sans-serif", 22))
+            .margin(14)
+            .x_label_area_size(48)
+            .y_label_area_size(78);
+        let x = self.x_range.0..self.x_range.1;
+        if top / bottom > 20.0 {
+            // Many decades (a glossy peak over a diffuse floor): no more than six below the top.
+            let bottom = bottom.max(top * 1e-6);
+            let chart = builder.build_cartesian_2d(x, (bottom / 1.5..top * 1.5).log_scale())?;
+            self.plot(chart, " (log scale)")
+        } else {
+            let chart = builder.build_cartesian_2d(x, 0.0..top * 1.12)?;
+            self.plot(chart, "")
+        }?;
+        root.present()?;
+        Ok(())
+    }
+
+    fn plot<'a, DB: DrawingBackend + 'a, Y: Ranged<ValueType = f64> + ValueFormatter<f64>>(
+        &self,
+        mut chart: ChartContext<'a, DB, Cartesian2d<plotters::coord::types::RangedCoordf64, Y>>,
+        y_note: &str,
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        chart
+            .configure_mesh()
+            .x_desc(&self.x_label)
+            .y_desc(format!("{}{y_note}", self.y_label))
+            .x_label_formatter(&|v| format_value(*v))
+            .y_label_formatter(&|v| format_value(*v))
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 16))
+            .light_line_style(RGBColor(235, 235, 235))
+            .draw()?;
+        for series in &self.series {
+            let colour = Palette99::pick(series.colour).to_rgba();
+            let style = ShapeStyle::from(&colour).stroke_width(2);
+            let shown = |p: &&(f64, f64, f64, f64)| p.1.is_finite() && p.1 > 0.0;
+            if series.line {
+                chart
+                    .draw_series(LineSeries::new(
+                        series.points.iter().filter(shown).map(|p| (p.0, p.1)),
+                        style,
+                    ))?
+                    .label(series.label.clone())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
+            } else {
+                chart
+                    .draw_series(
+                        series
+                            .points
+                            .iter()
+                            .filter(shown)
+                            .map(|p| Circle::new((p.0, p.1), 3, colour.filled())),
+                    )?
+                    .label(series.label.clone())
+                    .legend(move |(x, y)| Circle::new((x + 9, y), 3, colour.filled()));
+            }
+            chart.draw_series(series.points.iter().filter(|p| p.3 > p.2 && p.2 > 0.0).map(
+                |p| {
+                    PathElement::new(
+                        vec![(p.0, p.2), (p.0, p.3)],
+                        ShapeStyle::from(&colour).stroke_width(1),
+                    )
+                },
+            ))?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()?;
+        Ok(())
+    }
+}
+
 /// Axis numbers: plain where short, engineering form for counts.
 fn format_value(v: f64) -> String {
     let a = v.abs();

@@ -16,7 +16,7 @@ use crate::variant::VariantKey;
 
 use super::bench::{Results, Run};
 use super::stats::MinMeanMax;
-use super::sweep::{key_matches, Published, StudyMeta, Target};
+use super::sweep::{key_matches, reference_chart_stem, Published, StudyMeta, Target};
 
 /// One study's directory, read back.
 pub struct StudyDir {
@@ -389,6 +389,10 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
         relative(&s.dir, out_dir),
     );
     let _ = writeln!(md, "Command: `{}`\n", r.command);
+    if !m.reference.is_empty() {
+        reference_section(md, s, out_dir);
+        return;
+    }
     if let Some(line) = executable_stats_line(r) {
         let _ = writeln!(md, "{line}\n");
     }
@@ -838,6 +842,81 @@ fn bake_error_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
                 md,
                 "![{} — {chart}]({})\n",
                 m.title,
+                relative(&png, out_dir)
+            );
+        }
+    }
+}
+
+/// A `[reference]` study: each material's model against the stochastic reference, the
+/// relative errors per view cosine, and the slice charts.
+fn reference_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
+    let m = &s.meta;
+    let paths = m.reference[0].paths;
+    let _ = writeln!(
+        md,
+        "The transfer-matrix model in f64 (FGD integrated exactly, the TIR correction from the \
+         exact trapped fraction, the variant's masking form) against the stochastic reference \
+         (`lamina reference`, {paths} paths per channel and view cosine): the total \
+         reflectance R (mean of the channels, ± the reference's standard error), the model's \
+         relative error with and without its TIR correction, and the relative L1 error of the \
+         BRDF in the plane of incidence (in parentheses: the part the reference's noise \
+         explains). `reference::compare` defines each figure.\n"
+    );
+    let _ = writeln!(
+        md,
+        "| material | model | cos θ | reference R | model R | error | without TIR | slice error (noise) |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
+    let mean = |v: [f64; 3]| (v[0] + v[1] + v[2]) / 3.0;
+    let (mut within, mut within_no_tir, mut n) = (0, 0, 0);
+    let mut worst: Option<(f64, &str, f64)> = None;
+    for e in &m.reference {
+        for row in &e.rows {
+            let (slice, noise) = row.slice_error();
+            let error = row.relative_error();
+            let _ = writeln!(
+                md,
+                "| {} | {} | {:.2} | {:.4} ± {:.4} | {:.4} | {:+.1} % | {:+.1} % | {:.1} % ({:.1} %) |",
+                e.material,
+                e.model,
+                row.cos_theta,
+                mean(row.reference.mean),
+                mean(row.reference.std_error) / 3f64.sqrt(),
+                mean(row.model),
+                100.0 * error,
+                100.0 * row.relative_error_no_tir(),
+                100.0 * slice,
+                100.0 * noise
+            );
+            n += 1;
+            within += usize::from(error.abs() < 0.1);
+            within_no_tir += usize::from(row.relative_error_no_tir().abs() < 0.1);
+            if worst.map_or(true, |w| error.abs() > w.0.abs()) {
+                worst = Some((error, &e.material, row.cos_theta));
+            }
+        }
+    }
+    md.push('\n');
+    if let Some((error, material, mu)) = worst {
+        let _ = writeln!(
+            md,
+            "Reading: the model's total reflectance is within 10 % of the reference at {within} \
+             of {n} (material, view) points with its TIR correction and at {within_no_tir} \
+             without it; the largest error is {:+.1} % ({material}, cos θ = {mu:.2}).\n",
+            100.0 * error
+        );
+    }
+    for e in &m.reference {
+        let png = s
+            .dir
+            .join(format!("{}.png", reference_chart_stem(&e.material)));
+        if png.is_file() {
+            let _ = writeln!(
+                md,
+                "![{} — {}]({})\n",
+                m.title,
+                e.material,
                 relative(&png, out_dir)
             );
         }
@@ -1472,6 +1551,7 @@ mod tests {
                 counter_sizes: None,
                 targets: Vec::new(),
                 bake_error: Vec::new(),
+                reference: Vec::new(),
             },
         };
         let lines = reading(&study);
@@ -1569,6 +1649,7 @@ mod tests {
                 counter_sizes: Some([[48, 48], [96, 96]]),
                 targets: Vec::new(),
                 bake_error: Vec::new(),
+                reference: Vec::new(),
             },
         };
         let md = render(std::slice::from_ref(&study), Path::new("REPORT.md"));
@@ -1686,6 +1767,7 @@ mod tests {
                         },
                     ],
                 }],
+                reference: Vec::new(),
             },
         };
         let md = render(std::slice::from_ref(&study), Path::new("REPORT.md"));

@@ -16,6 +16,9 @@
 //! counter_sizes = ["48x48", "96x96"]  # the two counted resolutions (per pixel: the difference)
 //! fit = "linear"                      # optional: report a least-squares line along axis 1
 //! tile_width = 128                    # optional: a suite's sizes apply if their width is a multiple
+//! [reference]                         # optional, alone: each material's model against the
+//! cosines = [1.0, 0.7, 0.4, 0.15]     #   stochastic reference (`reference::compare`), no
+//! paths = 200000                      #   timing; paths per channel and view cosine
 //! [[axis]]                            # cartesian product, first axis on the charts' x axis
 //! name = "max_layers"
 //! values = [2, 4, 8, 16]
@@ -40,10 +43,11 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::imageio::write_file_atomically;
 use crate::material::Stack;
+use crate::reference::compare::MaterialReference;
 use crate::render::lights::{Lighting, PRESETS};
 use crate::render::scene::Scene;
 use crate::size::Size;
-use crate::variant::{VariantKey, AXES};
+use crate::variant::{Model, VariantKey, AXES};
 
 use super::bench::Case;
 use super::counter::{CounterSetup, CounterSizes};
@@ -91,6 +95,28 @@ pub struct SweepFile {
     #[serde(default, rename = "target")]
     pub targets: Vec<Target>,
     pub bake_error: Option<BakeErrorSpec>,
+    pub reference: Option<ReferenceSpec>,
+}
+
+/// `[reference]`: the study compares each material's model with the stochastic reference
+/// (`reference::compare`) at these view cosines instead of timing anything.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReferenceSpec {
+    pub cosines: Vec<f64>,
+    /// Paths per channel and view cosine.
+    pub paths: u64,
+    pub seed: Option<u64>,
+}
+
+/// A `[reference]` study, checked: the materials (each with its variant: model and masking
+/// form), the view cosines, the paths and the seed.
+#[derive(Clone, Debug)]
+pub struct ReferenceStudy {
+    pub cases: Vec<Case>,
+    pub cosines: Vec<f64>,
+    pub paths: u64,
+    pub seed: u64,
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -188,13 +214,17 @@ pub struct Study {
     pub targets: Vec<Target>,
     /// Table sizes and image side of the baked-table error study.
     pub bake_error: Option<(Vec<u32>, u32)>,
+    /// A `[reference]` study (then `points` is empty: nothing is timed).
+    pub reference: Option<ReferenceStudy>,
 }
 
 impl Study {
     /// Counts instructions too (`--counter instructions`): at the study's own counter sizes
     /// when it counts already, else at [`CounterSizes::DEFAULT`].
     pub fn count_instructions(&mut self) {
-        self.counter.get_or_insert(self.counter_sizes);
+        if self.reference.is_none() {
+            self.counter.get_or_insert(self.counter_sizes);
+        }
     }
 }
 
@@ -233,12 +263,13 @@ pub fn load(file: &Path) -> Result<(Vec<Study>, bool)> {
                 || sweep.base.is_some()
                 || !sweep.targets.is_empty()
                 || sweep.bake_error.is_some()
+                || sweep.reference.is_some()
             {
                 return Err(bad(
                     file,
                     "studies",
-                    "a suite lists studies only; `axis`, `materials`, `base`, `target` and \
-                     `bake_error` belong in the study files",
+                    "a suite lists studies only; `axis`, `materials`, `base`, `target`, \
+                     `bake_error` and `reference` belong in the study files",
                 ));
             }
             let overrides = Overrides {
@@ -633,7 +664,13 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
             });
         }
     }
-    if points.is_empty() {
+    let reference = sweep
+        .reference
+        .as_ref()
+        .map(|spec| check_reference(file, sweep, spec, &mut points))
+        .transpose()?;
+    let counter = if reference.is_some() { None } else { counter };
+    if points.is_empty() && reference.is_none() {
         return Err(bad(
             file,
             "axis",
@@ -684,6 +721,76 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
         fit,
         targets,
         bake_error,
+        reference,
+    })
+}
+
+/// `[reference]`: alone in its study (no axes, figures, targets or bake error), view cosines
+/// in (0, 1], a path count in range. Takes the study's points: their materials and variants
+/// are the reference study's, and nothing is timed.
+fn check_reference(
+    file: &Path,
+    sweep: &SweepFile,
+    spec: &ReferenceSpec,
+    points: &mut Vec<Point>,
+) -> Result<ReferenceStudy> {
+    if !sweep.axes.is_empty()
+        || !sweep.published.is_empty()
+        || !sweep.targets.is_empty()
+        || sweep.bake_error.is_some()
+    {
+        return Err(bad(
+            file,
+            "reference",
+            "a reference study compares each material's own model with the stochastic \
+             reference; it takes `materials` and `base`, not `axis`, `published`, `target` \
+             or `bake_error`",
+        ));
+    }
+    if spec.cosines.is_empty() {
+        return Err(bad(
+            file,
+            "reference.cosines",
+            "empty: give view cosines in (0, 1]",
+        ));
+    }
+    if let Some(c) = spec
+        .cosines
+        .iter()
+        .find(|c| !(c.is_finite() && **c > 0.0 && **c <= 1.0))
+    {
+        return Err(bad(
+            file,
+            "reference.cosines",
+            &format!("{c}: allowed: view cosines in (0, 1]"),
+        ));
+    }
+    if spec.paths == 0 || spec.paths > crate::reference::MAX_PATHS {
+        return Err(bad(
+            file,
+            "reference.paths",
+            &format!(
+                "{}: allowed: 1 to {} paths per channel and view cosine",
+                spec.paths,
+                crate::reference::MAX_PATHS
+            ),
+        ));
+    }
+    if let Some(p) = points.iter().find(|p| p.case.variant.model == Model::Ggx) {
+        return Err(bad(
+            file,
+            "base",
+            &format!(
+                "{}: model=ggx is not a layered model; a reference study compares tm2 or tm6",
+                p.case.variant
+            ),
+        ));
+    }
+    Ok(ReferenceStudy {
+        cases: points.drain(..).map(|p| p.case).collect(),
+        cosines: spec.cosines.clone(),
+        paths: spec.paths,
+        seed: spec.seed.unwrap_or(1),
     })
 }
 
@@ -819,6 +926,9 @@ pub struct StudyMeta {
     pub targets: Vec<Target>,
     #[serde(default)]
     pub bake_error: Vec<MaterialBakeError>,
+    /// A `[reference]` study's comparisons, one per material.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub reference: Vec<MaterialReference>,
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -855,6 +965,7 @@ pub struct Timed {
     /// The runs' cases in order (the added ggx baselines, then the study's points).
     pub cases: Vec<Case>,
     pub bake_error: Vec<MaterialBakeError>,
+    pub reference: Vec<MaterialReference>,
 }
 
 /// The first part of [`run`]: the timings, interleaved on `gpu`, and the bake-error study.
@@ -883,10 +994,15 @@ pub fn time(
         }
         None => Vec::new(),
     };
+    let reference = match &study.reference {
+        Some(spec) => reference_comparisons(spec, progress)?,
+        None => Vec::new(),
+    };
     Ok(Timed {
         results,
         cases,
         bake_error,
+        reference,
     })
 }
 
@@ -941,6 +1057,7 @@ pub fn finish(study: &Study, timed: Timed, counted: bool) -> (super::bench::Resu
         results,
         cases,
         bake_error,
+        reference,
     } = timed;
     let baselines = cases.len() - study.points.len();
     let counted = study.counter.filter(|_| counted);
@@ -966,8 +1083,36 @@ pub fn finish(study: &Study, timed: Timed, counted: bool) -> (super::bench::Resu
         counter_sizes: counted.map(|c| c.both().map(|s| [s.width, s.height])),
         targets: study.targets.clone(),
         bake_error,
+        reference,
     };
     (results, meta)
+}
+
+/// A `[reference]` study: each material's model against the stochastic reference, on every
+/// core.
+fn reference_comparisons(
+    spec: &ReferenceStudy,
+    progress: &mut impl FnMut(&str, usize, usize),
+) -> Result<Vec<MaterialReference>> {
+    let per_material = spec.paths * spec.cosines.len() as u64;
+    let total = per_material * spec.cases.len() as u64;
+    let never = std::sync::atomic::AtomicBool::new(false);
+    let mut out = Vec::with_capacity(spec.cases.len());
+    for (i, case) in spec.cases.iter().enumerate() {
+        let before = i as u64 * per_material;
+        let compared = crate::reference::compare::compare(
+            &case.stack.name,
+            &case.stack.params(),
+            case.variant,
+            &spec.cosines,
+            (spec.paths, spec.seed),
+            &mut |paths| progress("reference paths", (before + paths) as usize, total as usize),
+            &never,
+        )?
+        .expect("a reference study is never stopped");
+        out.push(compared);
+    }
+    Ok(out)
 }
 
 /// The baked-table error study of every material the study bakes (its first `mode=baked` run
@@ -1042,7 +1187,77 @@ pub fn write(
         chart.write(&path)?;
         charts.push(path.with_extension("png"));
     }
+    for e in &meta.reference {
+        let path = dir.join(reference_chart_stem(&e.material));
+        reference_chart(e).write(&path)?;
+        charts.push(path.with_extension("png"));
+    }
     Ok(charts)
+}
+
+/// The file stem of a material's chart in a `[reference]` study: `reference-` and the name's
+/// letters and digits, the rest as `-`.
+pub fn reference_chart_stem(material: &str) -> String {
+    let name: String = material
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() {
+                c.to_ascii_lowercase()
+            } else {
+                '-'
+            }
+        })
+        .collect();
+    format!("reference-{name}")
+}
+
+/// A material's BRDF in the plane of incidence, per view cosine: the model's curve and the
+/// reference's bins (± 2 standard errors), the channels' mean.
+fn reference_chart(e: &MaterialReference) -> super::chart::XyChart {
+    use super::chart::{XyChart, XySeries};
+    let mean = |v: [f64; 3]| (v[0] + v[1] + v[2]) / 3.0;
+    let centre = |i: usize| {
+        let (a, b) = crate::reference::slice_bin_edges(i);
+        (0.5 * (a + b)).to_degrees()
+    };
+    let mut series = Vec::new();
+    for (j, row) in e.rows.iter().enumerate() {
+        series.push(XySeries {
+            label: format!("model, cos θ = {:.2}", row.cos_theta),
+            points: row
+                .slice_model
+                .iter()
+                .enumerate()
+                .map(|(i, v)| (centre(i), mean(*v), 0.0, 0.0))
+                .collect(),
+            line: true,
+            colour: j,
+        });
+        series.push(XySeries {
+            label: format!("reference, cos θ = {:.2}", row.cos_theta),
+            points: row
+                .slice_reference
+                .iter()
+                .enumerate()
+                .map(|(i, r)| {
+                    let (m, se) = (mean(r.mean), mean(r.std_error) / 3f64.sqrt());
+                    (centre(i), m, m - 2.0 * se, m + 2.0 * se)
+                })
+                .collect(),
+            line: false,
+            colour: j,
+        });
+    }
+    XyChart {
+        title: format!(
+            "{} ({}) — BRDF in the plane of incidence",
+            e.material, e.model
+        ),
+        x_label: "θ_o (degrees; positive: mirror side)".into(),
+        y_label: "BRDF (1/sr), mean of RGB".into(),
+        x_range: (-90.0, 90.0),
+        series,
+    }
 }
 
 /// A value read off a run with its whiskers: (value, low, high).
@@ -1055,6 +1270,10 @@ pub fn charts_of(
     meta: &StudyMeta,
 ) -> Vec<(&'static str, super::chart::Chart)> {
     use super::chart::{Chart, Series};
+    if meta.points.is_empty() {
+        // A `[reference]` study times nothing.
+        return Vec::new();
+    }
     let x_axis = meta
         .axes
         .first()

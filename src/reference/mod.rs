@@ -19,6 +19,7 @@
 //!   sectors of azimuth from the mirror direction; every bin has the same projected solid
 //!   angle).
 
+pub mod compare;
 pub mod walk;
 
 use std::f64::consts::{PI, TAU};
@@ -26,7 +27,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::DVec3;
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::model::random::{case_seed, Rng};
@@ -81,7 +82,7 @@ impl Settings {
 }
 
 /// A mean per channel with its standard error.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Estimate {
     pub mean: [f64; 3],
     pub std_error: [f64; 3],
@@ -251,7 +252,7 @@ pub fn simulate(
     layers: &[LayerParams],
     settings: &Settings,
     mu: f64,
-    progress: &(dyn Fn(u64) + Sync),
+    progress: &mut dyn FnMut(u64),
     stop: &AtomicBool,
 ) -> Result<Option<Reference>> {
     settings.check()?;

@@ -76,10 +76,10 @@ impl BakedTable {
         let evaluations = evaluator.evaluate_lobes(layers, &cosines)?;
         let first = &evaluations[0];
         let lobe_count = first.evaluation.lobes.len();
-        if evaluations
-            .iter()
-            .any(|e| e.evaluation.lobes.len() != lobe_count || e.retro_mask != first.retro_mask)
-        {
+        if evaluations.iter().any(|e| {
+            e.evaluation.lobes.len() != lobe_count
+                || e.evaluation.retro_mask != first.evaluation.retro_mask
+        }) {
             return Err(Error::Unsupported(
                 "the model emitted a different lobe set at different view cosines; a baked \
                  table needs one lobe set"
@@ -103,7 +103,7 @@ impl BakedTable {
         let mut texels = Vec::with_capacity(kept.len() * size as usize);
         let mut retro_mask = 0;
         for (slot, &k) in kept.iter().enumerate() {
-            if k < 32 && first.retro_mask & (1 << k) != 0 {
+            if k < 32 && first.evaluation.retro_mask & (1 << k) != 0 {
                 retro_mask |= 1 << slot;
             }
             for e in &evaluations {

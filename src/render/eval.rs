@@ -99,11 +99,9 @@ pub struct GpuEvaluator<'g> {
     diffuse_kernel: std::cell::OnceCell<ComputeKernel>,
 }
 
-/// One evaluation on the GPU and which of its lobes are lit around the view (bit k: lobe k
-/// back-scatters, `LOBE_RETRO`; the first 32 lobes).
+/// One evaluation on the GPU, its lobes' kinds in `retro_mask` (`LOBE_RETRO`).
 pub struct GpuEvaluation {
     pub evaluation: Evaluation,
-    pub retro_mask: u32,
 }
 
 impl<'g> GpuEvaluator<'g> {
@@ -311,8 +309,8 @@ fn unpack(chunk: &[[f32; 4]]) -> GpuEvaluation {
                     diffuse: v[3] < 0.0,
                 })
                 .collect(),
+            // The kernel stores the mask's bits, not a value (tm_eval.comp.glsl).
+            retro_mask: chunk[1][3].to_bits(),
         },
-        // The kernel stores the mask's bits, not a value (tm_eval.comp.glsl).
-        retro_mask: chunk[1][3].to_bits(),
     }
 }

@@ -1,0 +1,243 @@
+//! The transfer-matrix model against the stochastic reference, per material and view cosine:
+//! total reflectance and the BRDF in the plane of incidence (the `[reference]` study of a sweep
+//! file, `profiling/sweeps/reference.toml`).
+//!
+//! The model side is the f64 model itself, as the paper defines it: FGD integrated exactly and
+//! the TIR correction from the exact trapped fraction (the integral the TIR table holds), with
+//! the interfaces' masking the `g2` of the study's variant. Its BRDF is the sum of its lobes as
+//! lamina shades them under a light (`model::light`: each lobe a GGX lobe of its roughness
+//! normalised to its energy, a diffuse base's lobe Lambertian), binned exactly as the
+//! reference bins its paths: each lobe is integrated over its own quadrature
+//! (`light::for_each_lobe_direction`, which follows the lobe however sharp) and each point's
+//! energy lands in the bin of its direction.
+
+use std::f64::consts::PI;
+use std::sync::atomic::AtomicBool;
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use super::{simulate, slice_bin, slice_projected_solid_angle, Estimate, Settings, SLICE_BINS};
+use crate::error::Result;
+use crate::model::fgd::ExactFgd;
+use crate::model::light::{
+    for_each_lobe_direction, lobe_albedo, lobe_view, unnormalised_lobe, LobeKind, MIN_ALPHA,
+};
+use crate::model::{tir, Evaluation, LayerParams, NoTir, Tir};
+use crate::oracle::evaluate_model;
+use crate::variant::{Model, Ndf, VariantKey};
+
+/// Grid side of each lobe's quadrature for the model's slice.
+const LOBE_GRID: u32 = 256;
+
+/// Grid side of the exact trapped fraction (`model::tir::trapped_fraction`).
+const TIR_GRID: u32 = 128;
+
+/// The TIR correction from the exact trapped fraction (no table).
+struct ExactTir;
+
+impl Tir for ExactTir {
+    fn tir(&self, mu: f64, alpha: f64, eta: f64) -> f64 {
+        tir::trapped_fraction(mu, alpha, eta, TIR_GRID)
+    }
+}
+
+/// One material's comparison, as a study keeps it (`study.json`).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+pub struct MaterialReference {
+    pub material: String,
+    pub model: String,
+    pub variant: String,
+    pub paths: u64,
+    pub rows: Vec<ReferenceRow>,
+}
+
+/// The model and the reference at one view cosine.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+pub struct ReferenceRow {
+    pub cos_theta: f64,
+    /// The reference's total reflectance.
+    pub reference: Estimate,
+    /// Energy of the reference's paths given up (R is short by at most this).
+    pub unresolved: [f64; 3],
+    /// The model's total reflectance with its TIR correction.
+    pub model: [f64; 3],
+    /// The same without the TIR correction.
+    pub model_no_tir: [f64; 3],
+    /// BRDF per plane-of-incidence bin (`reference::slice_bin`): the reference's…
+    pub slice_reference: Vec<Estimate>,
+    /// …and the model's.
+    pub slice_model: Vec<[f64; 3]>,
+}
+
+fn mean3(v: [f64; 3]) -> f64 {
+    (v[0] + v[1] + v[2]) / 3.0
+}
+
+impl ReferenceRow {
+    /// (model − reference) / reference of the channels' mean reflectance.
+    pub fn relative_error(&self) -> f64 {
+        let r = mean3(self.reference.mean);
+        (mean3(self.model) - r) / r
+    }
+
+    /// The same for the model without its TIR correction.
+    pub fn relative_error_no_tir(&self) -> f64 {
+        let r = mean3(self.reference.mean);
+        (mean3(self.model_no_tir) - r) / r
+    }
+
+    /// The slice's relative L1 error, Σ |f_model − f_ref| Ω⊥ / Σ f_ref Ω⊥ over the bins
+    /// (channels' mean), and the part of it the reference's own noise explains (the expected
+    /// |error| of a normal estimate, √(2/π) σ, summed the same way).
+    pub fn slice_error(&self) -> (f64, f64) {
+        let (mut diff, mut noise, mut total) = (0.0, 0.0, 0.0);
+        for i in 0..SLICE_BINS {
+            let omega = slice_projected_solid_angle(i);
+            let r = mean3(self.slice_reference[i].mean);
+            let se = mean3(self.slice_reference[i].std_error) / 3f64.sqrt();
+            diff += (mean3(self.slice_model[i]) - r).abs() * omega;
+            noise += (2.0 / PI).sqrt() * se * omega;
+            total += r * omega;
+        }
+        if total > 0.0 {
+            (diff / total, noise / total)
+        } else {
+            (0.0, 0.0)
+        }
+    }
+}
+
+/// The model's BRDF per slice bin: each lobe of `evaluation` (made at view cosine `mu`)
+/// integrated over the bin, over its projected solid angle.
+///
+/// A lobe at least [`BROAD`] rough is integrated over each bin's own midpoint grid
+/// ([`BIN_GRID`]² points in θ and azimuth); a sharper one over its own quadrature, each point's
+/// energy landing in the bin of its direction (a bin grid would miss its peak; its quadrature's
+/// azimuths, once they fall inside the slice, all do: it is narrow beside the slice's width).
+pub fn model_slice(evaluation: &Evaluation, mu: f64, variant: VariantKey) -> Vec<[f64; 3]> {
+    let v = DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+    let mut energy = vec![[0.0; 3]; SLICE_BINS];
+    let mut diffuse = [0.0; 3];
+    for (k, lobe) in evaluation.lobes.iter().enumerate() {
+        if lobe.weight.iter().all(|&w| w <= 0.0) {
+            continue;
+        }
+        if lobe.diffuse {
+            // ρ/π everywhere: the same in every bin.
+            for (d, w) in diffuse.iter_mut().zip(lobe.weight) {
+                *d += w / PI;
+            }
+            continue;
+        }
+        let kind = if k < 32 && evaluation.retro_mask & (1 << k) != 0 {
+            LobeKind::Retro
+        } else {
+            LobeKind::Mirror
+        };
+        let alpha = lobe.roughness.max(MIN_ALPHA);
+        let white = lobe_albedo(variant.g2, mu, alpha);
+        let lobe_v = lobe_view(v, kind);
+        // f·μ_l of this lobe per unit weight.
+        let term = |l: DVec3| unnormalised_lobe(variant.g2, Ndf::Ggx, lobe_v, l, alpha) / white;
+        let mut add = |i: usize, e: f64| {
+            for (sum, w) in energy[i].iter_mut().zip(lobe.weight) {
+                *sum += w * e;
+            }
+        };
+        if alpha >= BROAD {
+            for i in 0..SLICE_BINS {
+                add(i, bin_integral(i, &term));
+            }
+        } else {
+            for_each_lobe_direction(mu, alpha, LOBE_GRID, |l, d_omega| {
+                // The grid follows the mirror lobe; a retro lobe is its mirror image.
+                let l = lobe_view(l, kind);
+                if let Some(i) = slice_bin(l) {
+                    add(i, term(l) * d_omega);
+                }
+            });
+        }
+    }
+    (0..SLICE_BINS)
+        .map(|i| {
+            let omega = slice_projected_solid_angle(i);
+            std::array::from_fn(|c| energy[i][c] / omega + diffuse[c])
+        })
+        .collect()
+}
+
+/// Roughness from which a lobe is integrated over each bin's grid ([`model_slice`]).
+const BROAD: f64 = 0.05;
+
+/// Side of each bin's midpoint grid (θ × azimuth).
+const BIN_GRID: usize = 16;
+
+/// ∫ g(l) dω over slice bin `i` by a [`BIN_GRID`]² midpoint rule.
+fn bin_integral(i: usize, g: &impl Fn(DVec3) -> f64) -> f64 {
+    let (a, b) = super::slice_bin_edges(i);
+    let half = super::SLICE_HALF_WIDTH_DEG.to_radians();
+    let n = BIN_GRID as f64;
+    let (d_theta, d_phi) = ((b - a) / n, 2.0 * half / n);
+    let mut sum = 0.0;
+    for p in 0..BIN_GRID {
+        let signed = a + (p as f64 + 0.5) * d_theta;
+        let theta = signed.abs();
+        let (sin, cos) = theta.sin_cos();
+        // Positive θ on the mirror side (−x), negative on the view's side (+x).
+        let side = if signed >= 0.0 { -1.0 } else { 1.0 };
+        for q in 0..BIN_GRID {
+            let phi = -half + (q as f64 + 0.5) * d_phi;
+            let l = DVec3::new(side * sin * phi.cos(), sin * phi.sin(), cos);
+            sum += g(l) * sin * d_theta * d_phi;
+        }
+    }
+    sum
+}
+
+/// The model against the reference for one material (`layers`, named `name`) in `variant`'s
+/// model with its masking form, at each view cosine, the reference following `paths` paths
+/// per channel from `seed`; `None` when `stop` was set.
+pub fn compare(
+    name: &str,
+    layers: &[LayerParams],
+    variant: VariantKey,
+    cosines: &[f64],
+    (paths, seed): (u64, u64),
+    progress: &mut dyn FnMut(u64),
+    stop: &AtomicBool,
+) -> Result<Option<MaterialReference>> {
+    let settings = Settings {
+        paths,
+        seed,
+        g2: variant.g2,
+        media: variant.model == Model::Tm6,
+    };
+    let fgd = ExactFgd::new(variant.g2);
+    let mut rows = Vec::with_capacity(cosines.len());
+    for (j, &mu) in cosines.iter().enumerate() {
+        let before = j as u64 * paths;
+        let Some(reference) = simulate(layers, &settings, mu, &mut |p| progress(before + p), stop)?
+        else {
+            return Ok(None);
+        };
+        let model = evaluate_model(variant.model, layers, mu, &fgd, &ExactTir);
+        let model_no_tir = evaluate_model(variant.model, layers, mu, &fgd, &NoTir);
+        rows.push(ReferenceRow {
+            cos_theta: mu,
+            reference: reference.reflectance,
+            unresolved: reference.unresolved,
+            model: model.reflectance,
+            model_no_tir: model_no_tir.reflectance,
+            slice_reference: reference.slice,
+            slice_model: model_slice(&model, mu, variant),
+        });
+    }
+    Ok(Some(MaterialReference {
+        material: name.to_owned(),
+        model: variant.model.to_string(),
+        variant: variant.to_string(),
+        paths,
+        rows,
+    }))
+}
