@@ -11,7 +11,7 @@
 //! | model | `ggx`, `tm2`, `tm6` | spec constant 0 |
 //! | max_layers | 1 … 16 | spec constant 1 (sizes function-local arrays) |
 //! | fp16 | `off`, `on` | `#define LAMINA_FP16` (types change; needs `shaderFloat16`) |
-//! | tir | `none`, `constant`, `analytic`, `lut32`, `lut16` | spec constant 2 |
+//! | tir | `none`, `constant`, `analytic`, `lut32`, `lut16`, `fit` | spec constant 2 |
 //! | fgd | `karis`, `belcour`, `4d`, `resampled4d` | spec constant 3 |
 //! | g2 | `height-correlated`, `smith`, `schlick`, `earl` | spec constant 4 |
 //! | ndf | `ggx`, `karis` | spec constant 5 |
@@ -126,10 +126,16 @@ axis!(
     /// Total-internal-reflection correction.
     Tir, "tir", {
         None = "none",
+        /// The talk's dummy constant in place of the table fetch.
         Constant = "constant",
+        /// The talk's naive analytic estimator (ALGORITHMS.md §9.2).
         Analytic = "analytic",
+        /// The 3-D table in 32-bit floats.
         Lut32 = "lut32",
+        /// The same table rounded to half floats.
         Lut16 = "lut16",
+        /// A closed form least-squares fitted to the table (`lamina tables tir-fit`).
+        Fit = "fit",
     }
 );
 axis!(

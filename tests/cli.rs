@@ -326,7 +326,12 @@ fn energy_gap(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
 fn eval_cpu_backend_honours_the_tir_and_fgd_axes() {
     let cosines = "0.0001,0.3,1";
     let material = issue_material("tir-trap");
-    for variant in ["tir=lut32", "tir=analytic", "tir=constant,fgd=belcour"] {
+    for variant in [
+        "tir=lut32",
+        "tir=analytic",
+        "tir=constant,fgd=belcour",
+        "tir=fit",
+    ] {
         let gpu = eval_numbers(&material, variant, "gpu", cosines);
         let cpu = eval_numbers(&material, variant, "cpu", cosines);
         let exact = eval_numbers(&material, variant, "exact", cosines);

@@ -119,6 +119,8 @@ fn gpu_matches_cpu_oracle_on_random_cases() {
         "model=tm2,tir=analytic",
         "model=tm6,tir=lut32",
         "model=tm6,tir=analytic",
+        "model=tm2,tir=fit",
+        "model=tm6,tir=fit",
     ];
     let mut rng = Rng(0x1a3f_5c7e_9b2d_4f61);
     let mut cases = 0;
@@ -200,7 +202,7 @@ fn six_flux_emits_its_largest_lobe_count_on_the_gpu() {
 }
 
 /// Variants that cover every value of every axis, fp16 included.
-const VARIANTS: [&str; 24] = [
+const VARIANTS: [&str; 26] = [
     "model=tm2,max_layers=16",
     "model=tm6,max_layers=16",
     "model=tm2,max_layers=4,fp16=on",
@@ -225,6 +227,8 @@ const VARIANTS: [&str; 24] = [
     "model=tm6,tir=lut16,fgd=resampled4d,fp16=on",
     "model=tm2,max_layers=1",
     "model=tm6,max_layers=2,g2=smith",
+    "model=tm2,tir=fit,fgd=4d,fp16=on",
+    "model=tm6,tir=fit,g2=schlick",
 ];
 
 /// Random valid stacks over the whole documented parameter space (range ends, grazing

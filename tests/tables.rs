@@ -1,10 +1,11 @@
-//! The TIR table: GPU values against the f64 reference, the 16-bit copy, the disk cache; and
-//! every TIR mode and FGD table rendering every preset.
+//! The TIR table: GPU values against the f64 reference, the 16-bit copy, the disk cache, the
+//! fitted closed form against it; and every TIR mode and FGD table rendering every preset.
 
 mod common;
 
 use lamina::material::{presets, Stack};
-use lamina::model::tir::trapped_fraction;
+use lamina::model::tir::{trapped_fraction, AnalyticTir, FitTir};
+use lamina::model::tir_fit::COEFFICIENTS;
 use lamina::render::Renderer;
 use lamina::tables::cache;
 use lamina::tables::environment::EnvDesc;
@@ -87,6 +88,21 @@ fn tir_table_matches_the_f64_reference_and_its_half_copy() {
     common::assert_validation_clean(&gpu);
 }
 
+/// `tir=fit` against the table the LUT modes sample (64³, 1024 samples per texel), over its
+/// domain 0 < η < 1: the acceptance bound MSE ≤ 0.005 (profiling/TABLES.md has the study).
+#[test]
+fn the_fitted_tir_is_within_its_error_budget_against_the_full_table() {
+    let gpu = common::gpu();
+    let table = TirTable::build(&gpu, tir::DEFAULT_SIZE, tir::DEFAULT_SAMPLES, |_, _| {}).unwrap();
+    let fit = tir::error_against(&table, &FitTir(COEFFICIENTS));
+    let analytic = tir::error_against(&table, &AnalyticTir);
+    println!("tir=fit: {fit:?}\nanalytic: {analytic:?}");
+    assert_eq!(fit.points, 64 * 64 * 62);
+    assert!(fit.mse <= 0.005, "MSE {}", fit.mse);
+    assert!(fit.mse < analytic.mse / 100.0);
+    common::assert_validation_clean(&gpu);
+}
+
 #[test]
 fn the_cache_is_keyed_and_never_trusts_a_broken_file() {
     let gpu = common::gpu();
@@ -135,7 +151,7 @@ fn every_tir_and_fgd_value_renders_every_preset_finite() {
     let mut renderer = Renderer::new(&gpu, &common::studio(), env).unwrap();
     let stacks: Vec<Stack> = presets().iter().map(|p| Stack::load(p).unwrap()).collect();
     // Each TIR mode with the Karis FGD, and each other FGD table with the TIR table.
-    let axes = ["none", "constant", "analytic", "lut32", "lut16"]
+    let axes = ["none", "constant", "analytic", "lut32", "lut16", "fit"]
         .map(|tir| format!("tir={tir},fgd=karis"))
         .into_iter()
         .chain(["belcour", "4d", "resampled4d"].map(|fgd| format!("tir=lut32,fgd={fgd}")));

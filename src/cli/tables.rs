@@ -1,17 +1,22 @@
 //! `lamina tables tir | fgd-karis | fgd-4d | fgd-resampled | fgd-belcour`: builds a table (or
 //! loads it from the cache), prints its statistics and error studies (`lamina::tables::spot`,
 //! `tir_study`, `fgd_study`), writes the reference file format and the error maps.
+//! `lamina tables tir-fit` fits `tir=fit`'s coefficients (`lamina::tables::tir_fit`, CPU only)
+//! and writes them as Rust source.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Result;
 use lamina::imageio;
+use lamina::model::tir::{AnalyticTir, FitTir};
+use lamina::model::tir_fit::COEFFICIENTS;
 use lamina::profile::chart::HeatMap;
 use lamina::profile::stats::MinMeanMax;
 use lamina::tables::fgd::{self, Filter, Grid, GridKind};
 use lamina::tables::fgd_study::{self, ResampledStudy, EXACT_RESOLUTION, G2_FORM, PROBE_POINTS};
 use lamina::tables::split_sum::{self, SplitSumTable};
+use lamina::tables::tir_fit::{self, TirFit};
 use lamina::tables::tir_study::{self, TirStudy};
 use lamina::tables::{cache, spot, tir};
 use lamina::Gpu;
@@ -31,6 +36,8 @@ enum TableKind {
     FgdResampled,
     /// The 3-D TIR table (tir=lut32 / lut16).
     Tir,
+    /// Fits tir=fit's coefficients to the TIR table's f64 reference (CPU only).
+    TirFit,
 }
 
 /// How `fgd=resampled4d` brings κ to half resolution ([`Filter`]).
@@ -58,12 +65,16 @@ impl From<FilterArg> for Filter {
 pub struct TablesArgs {
     #[arg(value_enum)]
     kind: TableKind,
-    /// Write the table in the reference's binary format (ALGORITHMS.md §6).
+    /// Write the table in the reference's binary format (ALGORITHMS.md §6); tir-fit: the
+    /// coefficients as Rust source (src/model/tir_fit.rs).
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
     /// Write a heat map of the table's comparison (tir: |analytic − table|) as PNG.
     #[arg(long, value_name = "FILE.png")]
     error_map: Option<PathBuf>,
+    /// tir: write a heat map of |tir=fit − table| as PNG.
+    #[arg(long, value_name = "FILE.png")]
+    fit_error_map: Option<PathBuf>,
     /// Texels per axis.
     #[arg(long, default_value_t = 64, value_name = "N")]
     size: u32,
@@ -80,15 +91,19 @@ pub struct TablesArgs {
 
 pub fn run(global: &GlobalArgs, args: &TablesArgs) -> Result<()> {
     check(args)?;
-    let gpu = global.open_gpu()?;
+    let on_gpu = |table: fn(&Gpu, &TablesArgs) -> Result<()>| {
+        let gpu = global.open_gpu()?;
+        table(&gpu, args)?;
+        check_validation(&gpu)
+    };
     match args.kind {
-        TableKind::Tir => tir(&gpu, args)?,
-        TableKind::FgdKaris => karis(&gpu, args)?,
-        TableKind::Fgd4d => full_4d(&gpu, args)?,
-        TableKind::FgdResampled => resampled(&gpu, args)?,
-        TableKind::FgdBelcour => belcour(&gpu, args)?,
+        TableKind::TirFit => tir_fit(args),
+        TableKind::Tir => on_gpu(tir),
+        TableKind::FgdKaris => on_gpu(karis),
+        TableKind::Fgd4d => on_gpu(full_4d),
+        TableKind::FgdResampled => on_gpu(resampled),
+        TableKind::FgdBelcour => on_gpu(belcour),
     }
-    check_validation(&gpu)
 }
 
 /// The flags each table takes, before any GPU work.
@@ -99,7 +114,25 @@ fn check(args: &TablesArgs) -> Result<()> {
     if args.samples == Some(0) {
         anyhow::bail!("--samples 0: allowed 1 or more samples per texel");
     }
+    if args.fit_error_map.is_some() && args.kind != TableKind::Tir {
+        anyhow::bail!("--fit-error-map applies to the tir table only");
+    }
     match args.kind {
+        TableKind::Tir if args.size < 3 => anyhow::bail!(
+            "tir: --size {}: the study needs an η slice inside (0, 1), at least 3 texels per axis",
+            args.size
+        ),
+        TableKind::TirFit
+            if args.error_map.is_some()
+                || args.samples.is_some()
+                || args.rebuild
+                || args.size != tir::DEFAULT_SIZE =>
+        {
+            anyhow::bail!(
+                "tir-fit: the fit's data are fixed (src/tables/tir_fit.rs); it takes --out only \
+                 (--size, --samples, --rebuild and --error-map apply to the tables)"
+            )
+        }
         TableKind::FgdKaris if args.out.is_some() || args.error_map.is_some() => {
             anyhow::bail!("fgd-karis: --out and --error-map apply to the tir table only")
         }
@@ -217,29 +250,82 @@ fn tir(gpu: &Gpu, args: &TablesArgs) -> Result<()> {
         "lut16 against lut32: max |Δ| = {:.2e} (half-float rounding of values ≤ 1: ≤ 2.44e-4)",
         study.lut16_gap
     );
-    let analytic = study.analytic;
     println!(
-        "analytic estimator against the table ({} grid points, 0 < η < 1): MSE {:.4}, mean |Δ| {:.4}, \
-         max |Δ| {:.3} at (μ, α, η) = ({:.3}, {:.3}, {:.3}); the talk: MSE 0.0764, max 0.5",
-        analytic.points,
-        analytic.mse,
-        analytic.mean_abs,
-        analytic.max_abs,
-        analytic.worst_at.0,
-        analytic.worst_at.1,
-        analytic.worst_at.2
+        "analytic estimator against the table ({}); the talk: MSE 0.0764, max 0.5",
+        error_text(&study.analytic)
     );
+    println!("tir=fit against the table ({})", error_text(&study.fit));
     if let Some(path) = &args.out {
         write_file(path, &tir::reference_file_bytes(&table))?;
     }
-    if let Some(path) = &args.error_map {
-        write_error_map(
-            path,
-            "TIR: |analytic estimator − table|".into(),
-            ("μ (cos θ)", (0.0, 1.0)),
-            ("α", (0.0, 1.0)),
-            tir_study::analytic_error_panels(&table),
-        )?;
+    let maps = [
+        (
+            &args.error_map,
+            "analytic estimator",
+            &AnalyticTir as &dyn lamina::model::Tir,
+        ),
+        (&args.fit_error_map, "tir=fit", &FitTir(COEFFICIENTS)),
+    ];
+    for (path, name, estimate) in maps {
+        if let Some(path) = path {
+            write_error_map(
+                path,
+                format!("TIR: |{name} − table|"),
+                ("μ (cos θ)", (0.0, 1.0)),
+                ("α", (0.0, 1.0)),
+                tir_study::error_panels(&table, estimate),
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// An estimator's errors over a TIR grid, for one line.
+fn error_text(e: &tir::ErrorStats) -> String {
+    format!(
+        "{} grid points, 0 < η < 1: MSE {:.5}, mean |Δ| {:.4}, max |Δ| {:.3} at (μ, α, η) = \
+         ({:.3}, {:.3}, {:.3})",
+        e.points, e.mse, e.mean_abs, e.max_abs, e.worst_at.0, e.worst_at.1, e.worst_at.2
+    )
+}
+
+fn tir_fit(args: &TablesArgs) -> Result<()> {
+    let started = Instant::now();
+    let TirFit {
+        coefficients,
+        iterations,
+        error,
+    } = tir_fit::fit()?;
+    println!(
+        "tir-fit: {} coefficients fitted to the f64 trapped fraction ({}² midpoint rule) at {} \
+         vertices of the {}³ table's grid (one in {} along each axis, 0 < η < 1), in \
+         {iterations} Levenberg–Marquardt iterations ({:.2} s)",
+        coefficients.len(),
+        tir_fit::REFERENCE_RESOLUTION,
+        error.points,
+        tir::DEFAULT_SIZE,
+        tir_fit::GRID_STEP,
+        started.elapsed().as_secs_f64()
+    );
+    let listed: Vec<String> = coefficients.iter().map(|c| format!("{c:.6}")).collect();
+    println!("coefficients c0 … c6: {}", listed.join(", "));
+    println!("against the reference ({})", error_text(&error));
+    let difference = tir_fit::largest_difference(&coefficients, &COEFFICIENTS);
+    if difference == 0.0 {
+        println!(
+            "the built-in coefficients ({}) are these",
+            tir_fit::SOURCE_PATH
+        );
+    } else {
+        println!(
+            "the built-in coefficients ({}) differ (relative {difference:.2e}): write them with \
+             --out {} and rebuild",
+            tir_fit::SOURCE_PATH,
+            tir_fit::SOURCE_PATH
+        );
+    }
+    if let Some(path) = &args.out {
+        write_file(path, tir_fit::source_text(&coefficients).as_bytes())?;
     }
     Ok(())
 }

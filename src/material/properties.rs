@@ -17,7 +17,8 @@ use super::random::random_stack;
 use super::Stack;
 use crate::model::fgd::ExactFgd;
 use crate::model::random::{case_seed, Rng};
-use crate::model::tir::{trapped_fraction, AnalyticTir, ConstantTir, CONSTANT_FRACTION};
+use crate::model::tir::{trapped_fraction, AnalyticTir, ConstantTir, FitTir, CONSTANT_FRACTION};
+use crate::model::tir_fit::COEFFICIENTS;
 use crate::model::{tm2, tm6, Evaluation, Fgd, NoTir, Tir};
 use crate::variant::{Model, G2};
 
@@ -105,7 +106,15 @@ fn every_valid_stack_gives_finite_energy_conserving_values() {
     };
     let fgds: [&(dyn Fgd + Sync); 2] = [&exact, &Adversarial];
     let constant = ConstantTir(CONSTANT_FRACTION);
-    let tirs: [&(dyn Tir + Sync); 5] = [&NoTir, &constant, &AnalyticTir, &ExactTir, &Adversarial];
+    let fit = FitTir(COEFFICIENTS);
+    let tirs: [&(dyn Tir + Sync); 6] = [
+        &NoTir,
+        &constant,
+        &AnalyticTir,
+        &fit,
+        &ExactTir,
+        &Adversarial,
+    ];
     let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
     let (failures, worst) = std::thread::scope(|scope| {
         let workers: Vec<_> = (0..threads)

@@ -25,7 +25,8 @@ use super::simplify::{roles, simplify, Role, Simplified, Step};
 use super::Stack;
 use crate::model::fgd::ExactFgd;
 use crate::model::random::{case_seed, Rng};
-use crate::model::tir::{trapped_fraction, AnalyticTir, ConstantTir, CONSTANT_FRACTION};
+use crate::model::tir::{trapped_fraction, AnalyticTir, ConstantTir, FitTir, CONSTANT_FRACTION};
+use crate::model::tir_fit::COEFFICIENTS;
 use crate::model::{hg, Evaluation, Fgd, LayerParams, Lobe, NoTir, Tir, IOR_AIR};
 use crate::oracle;
 use crate::variant::{Model, G2, MAX_LAYERS_LIMIT};
@@ -378,10 +379,12 @@ fn simplified_stacks_evaluate_as_the_originals() {
         resolution: 4,
     };
     let constant = ConstantTir(CONSTANT_FRACTION);
-    let tirs: [(&str, &(dyn Tir + Sync)); 4] = [
+    let fit = FitTir(COEFFICIENTS);
+    let tirs: [(&str, &(dyn Tir + Sync)); 5] = [
         ("no TIR", &NoTir),
         ("constant TIR", &constant),
         ("analytic TIR", &AnalyticTir),
+        ("fitted TIR", &fit),
         ("exact TIR", &ExactTir),
     ];
     let mut failures = Vec::new();

@@ -8,10 +8,18 @@ pub fn g_of_alpha(alpha: f64) -> f64 {
     (-0.085 + 1.085 / (1.0 + (a / 0.5).powf(1.3))).clamp(0.0, 1.0)
 }
 
+/// The smallest α [`alpha_of_g`] gives (the shaders' `HG_MIN_ALPHA`).
+pub const MIN_ALPHA: f64 = 1e-4;
+
+/// HG g → (2α)^1.3, the paper's Eq. 15 solved for it without the root: one division, where
+/// α costs a pow. Unclamped: 0 at g = 1, 2.81 at g ≤ 0.2 (α = 1.11).
+pub fn alpha_power_of_g(g: f64) -> f64 {
+    1.085 / (g.clamp(-1.0, 1.0).max(0.2) + 0.085) - 1.0
+}
+
 /// HG g → GGX α; any g below 0.2284 maps to α = 1.
 pub fn alpha_of_g(g: f64) -> f64 {
-    let x = 1.085 / (g.clamp(-1.0, 1.0).max(0.2) + 0.085) - 1.0;
-    (0.5 * x.powf(1.0 / 1.3)).clamp(1e-4, 1.0)
+    (0.5 * alpha_power_of_g(g).powf(1.0 / 1.3)).clamp(MIN_ALPHA, 1.0)
 }
 
 /// Lobe refraction through relative IOR η (the paper's Eq. 17–18).

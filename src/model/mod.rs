@@ -20,6 +20,7 @@ pub mod light;
 pub mod microfacet;
 pub mod random;
 pub mod tir;
+pub mod tir_fit;
 pub mod tm2;
 pub mod tm6;
 

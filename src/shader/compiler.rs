@@ -178,7 +178,8 @@ fn codes_glsl() -> String {
     }
     let mut out = String::from(
         "// Written by src/shader/compiler.rs from the Rust value tables (src/variant.rs) and\n\
-         // the model's constants (model, model::hg, model::tir). Do not copy these by hand.\n\
+         // the model's constants (model, model::hg, model::tir, model::tir_fit). Do not copy\n\
+         // these by hand.\n\
          #ifndef LAMINA_GENERATED_CODES\n#define LAMINA_GENERATED_CODES\n",
     );
     axis::<Model>(&mut out);
@@ -191,6 +192,7 @@ fn codes_glsl() -> String {
         ("TM_INDEX_MATCHED", crate::model::INDEX_MATCHED),
         ("TM_REFLECTS_NOTHING", crate::model::REFLECTS_NOTHING),
         ("HG_RATIO_FLOOR", crate::model::hg::RATIO_FLOOR),
+        ("HG_MIN_ALPHA", crate::model::hg::MIN_ALPHA),
         ("LIGHT_MIN_ALPHA", crate::model::light::MIN_ALPHA),
         ("LIGHT_MIN_ALPHA_FP16", crate::model::light::MIN_ALPHA_FP16),
         (
@@ -201,9 +203,20 @@ fn codes_glsl() -> String {
             "TIR_CONSTANT_FRACTION",
             crate::model::tir::CONSTANT_FRACTION,
         ),
+        ("TIR_FIT_MIN_SCALE", crate::model::tir::FIT_MIN_SCALE),
+        ("TIR_FIT_X_MIN", crate::model::tir::fit_roughness(0.0)),
+        ("TIR_FIT_X_MAX", crate::model::tir::fit_roughness(1.0)),
     ] {
         out.push_str(&format!("#define {name} {value:e}\n"));
     }
+    // `tir=fit`'s coefficients (model::tir_fit, written by `lamina tables tir-fit`).
+    let fit = crate::model::tir_fit::COEFFICIENTS;
+    out.push_str(&format!(
+        "const float TIR_FIT_COEFFICIENTS[{}] = float[{}]({});\n",
+        fit.len(),
+        fit.len(),
+        fit.map(|c| format!("{c:e}")).join(", ")
+    ));
     // The Gauss–Legendre rule of the hemispherical Fresnel averages (model::diffuse), over
     // s = √μ on [0, 1].
     let rule = crate::model::diffuse::gauss_legendre_unit(crate::model::diffuse::HEMISPHERE_POINTS);
@@ -527,6 +540,7 @@ mod tests {
         for line in [
             "#define MODEL_TM6 2u",
             "#define TIR_LUT16 4u",
+            "#define TIR_FIT 5u",
             "#define FGD_RESAMPLED4D 3u",
             "#define G2_HEIGHT_CORRELATED 0u",
             "#define NDF_KARIS 1u",

@@ -4,7 +4,8 @@
 //! as the shader's sampler does ([`filter_axis`]).
 //!
 //! What `lamina tables` prints is computed here too: [`spot`] (every table's spot check),
-//! [`tir_study`] and [`fgd_study`] (the error studies of profiling/TABLES.md).
+//! [`tir_study`] and [`fgd_study`] (the error studies of profiling/TABLES.md), and [`tir_fit`]
+//! (the coefficients of `tir=fit`).
 
 pub mod belcour;
 pub mod cache;
@@ -15,6 +16,7 @@ pub mod lobe_albedo;
 pub mod split_sum;
 pub mod spot;
 pub mod tir;
+pub mod tir_fit;
 pub mod tir_study;
 
 /// How a table's texels sit on its axis.

@@ -266,13 +266,14 @@ impl crate::model::Tir for TableTir<'_> {
 /// The CPU provider that matches what a variant's shader computes for `tir`: the table's twin
 /// for `lut32`/`lut16`, else the table-free modes of `model::tir`.
 pub fn provider(tir: Tir, table: &TirTable) -> Box<dyn crate::model::Tir + '_> {
-    use crate::model::tir::{AnalyticTir, ConstantTir, CONSTANT_FRACTION};
+    use crate::model::tir::{AnalyticTir, ConstantTir, FitTir, CONSTANT_FRACTION};
     match tir {
         Tir::None => Box::new(crate::model::NoTir),
         Tir::Constant => Box::new(ConstantTir(CONSTANT_FRACTION)),
         Tir::Analytic => Box::new(AnalyticTir),
         Tir::Lut32 => Box::new(TableTir { table, half: false }),
         Tir::Lut16 => Box::new(TableTir { table, half: true }),
+        Tir::Fit => Box::new(FitTir(crate::model::tir_fit::COEFFICIENTS)),
     }
 }
 
@@ -287,33 +288,47 @@ pub struct ErrorStats {
     pub points: usize,
 }
 
-/// `estimate` against the table at every grid vertex with 0 < η < 1 (the domain the model
-/// queries: a relative IOR is positive, and η = 1 has no TIR).
-pub fn error_against(table: &TirTable, estimate: &dyn crate::model::Tir) -> ErrorStats {
-    let n = table.size;
-    let (mut sum2, mut sum, mut max, mut worst, mut points) = (0.0, 0.0, 0.0, (0.0, 0.0, 0.0), 0);
-    for k in 1..n - 1 {
-        for j in 0..n {
-            for i in 0..n {
-                let (mu, alpha, eta) = table.coordinates(i, j, k);
-                let e = (estimate.tir(mu, alpha, eta) - f64::from(table.texel(i, j, k))).abs();
-                sum2 += e * e;
-                sum += e;
-                points += 1;
-                if e > max {
-                    max = e;
-                    worst = (mu, alpha, eta);
-                }
+impl ErrorStats {
+    /// The statistics of `estimate` against reference values: `points` yields each point's
+    /// (μ, α, η) and its reference value. `None` without points.
+    pub fn of(
+        estimate: &dyn crate::model::Tir,
+        points: impl IntoIterator<Item = ((f64, f64, f64), f64)>,
+    ) -> Option<Self> {
+        let (mut sum2, mut sum, mut max, mut worst, mut count) =
+            (0.0, 0.0, 0.0, (0.0, 0.0, 0.0), 0);
+        for ((mu, alpha, eta), reference) in points {
+            let e = (estimate.tir(mu, alpha, eta) - reference).abs();
+            sum2 += e * e;
+            sum += e;
+            count += 1;
+            if e > max {
+                max = e;
+                worst = (mu, alpha, eta);
             }
         }
+        (count > 0).then(|| Self {
+            mse: sum2 / count as f64,
+            mean_abs: sum / count as f64,
+            max_abs: max,
+            worst_at: worst,
+            points: count,
+        })
     }
-    ErrorStats {
-        mse: sum2 / points as f64,
-        mean_abs: sum / points as f64,
-        max_abs: max,
-        worst_at: worst,
-        points,
-    }
+}
+
+/// `estimate` against the table at every grid vertex with 0 < η < 1 (the domain the model
+/// queries: a relative IOR is positive, and η = 1 has no TIR). The table needs at least 3
+/// texels per axis, for one η slice inside (0, 1).
+pub fn error_against(table: &TirTable, estimate: &dyn crate::model::Tir) -> ErrorStats {
+    let n = table.size;
+    let vertices =
+        (1..n - 1).flat_map(|k| (0..n).flat_map(move |j| (0..n).map(move |i| (i, j, k))));
+    ErrorStats::of(
+        estimate,
+        vertices.map(|(i, j, k)| (table.coordinates(i, j, k), f64::from(table.texel(i, j, k)))),
+    )
+    .expect("a studied TIR table has an η slice inside (0, 1)")
 }
 
 /// The table in the reference's file format (ALGORITHMS.md §6): three int32 sizes, three

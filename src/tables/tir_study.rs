@@ -1,8 +1,8 @@
 //! What `lamina tables tir` measures on the TIR table: its value range, a spot check against
 //! the f64 reference, the gap `tir=lut16` adds by rounding to half floats, the talk's study of
-//! the analytic estimator against the table (issue #6), and that error as heat-map panels. The
-//! command prints [`TirStudy`] and draws [`analytic_error_panels`]; the numbers land in
-//! profiling/TABLES.md.
+//! the analytic estimator against the table (issue #6), the same study of `tir=fit`, and those
+//! errors as heat-map panels. The command prints [`TirStudy`] and draws [`error_panels`]; the
+//! numbers land in profiling/TABLES.md.
 
 use std::path::Path;
 
@@ -10,8 +10,9 @@ use half::f16;
 
 use crate::error::Result;
 use crate::gpu::Gpu;
-use crate::model::tir::AnalyticTir;
-use crate::model::Tir as _;
+use crate::model::tir::{AnalyticTir, FitTir};
+use crate::model::tir_fit::COEFFICIENTS;
+use crate::model::Tir;
 use crate::profile::stats::MinMeanMax;
 
 use super::cache;
@@ -28,9 +29,12 @@ pub struct TirStudy {
     pub lut16_gap: f64,
     /// The analytic estimator against the table, 0 < η < 1.
     pub analytic: ErrorStats,
+    /// `tir=fit` against the table, 0 < η < 1.
+    pub fit: ErrorStats,
 }
 
 impl TirStudy {
+    /// The study of a table of at least 3 texels per axis ([`tir::error_against`]).
     pub fn of(table: &TirTable) -> Self {
         let values =
             MinMeanMax::of(table.texels.iter().map(|&v| f64::from(v))).expect("a table has texels");
@@ -44,6 +48,7 @@ impl TirStudy {
             spot_max_abs: super::spot::tir(table),
             lut16_gap,
             analytic: tir::error_against(table, &AnalyticTir),
+            fit: tir::error_against(table, &FitTir(COEFFICIENTS)),
         }
     }
 }
@@ -51,9 +56,9 @@ impl TirStudy {
 /// The η of the error map's panels (each panel takes the grid slice nearest).
 pub const PANEL_ETAS: [f64; 4] = [0.3, 0.5, 0.7, 0.9];
 
-/// |analytic estimator − table| over (μ, α) at the η slices nearest [`PANEL_ETAS`]: one
-/// (label, rows) panel each, rows over α and columns over μ.
-pub fn analytic_error_panels(table: &TirTable) -> Vec<(String, Vec<Vec<f64>>)> {
+/// |`estimate` − table| over (μ, α) at the η slices nearest [`PANEL_ETAS`]: one (label, rows)
+/// panel each, rows over α and columns over μ.
+pub fn error_panels(table: &TirTable, estimate: &dyn Tir) -> Vec<(String, Vec<Vec<f64>>)> {
     let size = table.size;
     PANEL_ETAS
         .iter()
@@ -65,8 +70,8 @@ pub fn analytic_error_panels(table: &TirTable) -> Vec<(String, Vec<Vec<f64>>)> {
                     (0..size)
                         .map(|i| {
                             let (mu, alpha, eta) = table.coordinates(i, j, k);
-                            let a = AnalyticTir.tir(mu, alpha, eta);
-                            (a - f64::from(table.texel(i, j, k))).abs()
+                            let e = estimate.tir(mu, alpha, eta);
+                            (e - f64::from(table.texel(i, j, k))).abs()
                         })
                         .collect()
                 })

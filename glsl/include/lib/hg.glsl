@@ -13,10 +13,15 @@ float hg_g_of_alpha(float alpha) {
     return clamp(-0.085 + 1.085 / (1.0 + pow(a / 0.5, 1.3)), 0.0, 1.0);
 }
 
+// HG g → (2α)^1.3, the paper's Eq. 15 solved for it without the root (one division, where α
+// costs a pow): what tir=fit reads.
+float hg_alpha_power_of_g(float g) {
+    return 1.085 / (max(clamp(g, -1.0, 1.0), 0.2) + 0.085) - 1.0;
+}
+
 // HG g → GGX α; any g below 0.2284 maps to α = 1.
 float hg_alpha_of_g(float g) {
-    float x = 1.085 / (max(clamp(g, -1.0, 1.0), 0.2) + 0.085) - 1.0;
-    return clamp(0.5 * pow(x, 1.0 / 1.3), 1e-4, 1.0);
+    return clamp(0.5 * pow(hg_alpha_power_of_g(g), 1.0 / 1.3), HG_MIN_ALPHA, 1.0);
 }
 
 // Lobe refraction through relative IOR η (the paper's Eq. 17–18).

@@ -1,12 +1,13 @@
 // Total-internal-reflection correction (ALGORITHMS.md §4.5, §9), by the TIR_MODE constant, from
 // the shading set's tir_table (bindings/shading.glsl; n³, vertex-centred (μ, α, η), see
-// tir_table.comp.glsl) in the LUT modes. Mirrors the Tir providers of src/model and
-// src/tables/tir.rs.
+// tir_table.comp.glsl) in the LUT modes, or a fitted closed form. Mirrors the Tir providers
+// of src/model and src/tables/tir.rs.
 #ifndef LAMINA_LIB_TIR
 #define LAMINA_LIB_TIR
 
 #include "math.glsl"
 #include "fresnel.glsl"
+#include "hg.glsl"
 #include "../shared/variant.glsl"
 #include "../bindings/shading.glsl"
 
@@ -35,13 +36,46 @@ float tir_analytic(float mu, float alpha, float eta) {
     return fresnel_dielectric(clamp(dot(wo, m), 0.0, 1.0), eta) * g1;
 }
 
-// Fraction of a lobe (incidence μ, roughness α) trapped by relative IOR η < 1.
-float tir_fraction(float mu, float alpha, float eta) {
+// `tir=fit`: a closed form least-squares fitted to the table (src/model/tir.rs's FitTir
+// derives it; its coefficients TIR_FIT_COEFFICIENTS come from src/model/tir_fit.rs, written by
+// `lamina tables tir-fit`). The fraction of the lobe's in-plane facet slopes that reflect its
+// centre out of the escape cone under GGX's 1-D slope law ½ + ½ m/√(s² + m²), with a fitted
+// scale s and shift, blended for rough lobes towards 1 − η² (c4 + c5 η²). Its roughness is
+// a = x^¾ ≈ 2α of x = (2α)^1.3, which the lobe's g gives with one division (α costs a pow).
+// Multiplied through by d = cos θ_c + μ: no division but the blend's.
+float tir_fit(float mu, float g, float eta) {
+    const float c[7] = TIR_FIT_COEFFICIENTS;
+    mu = clamp(mu, 0.0, 1.0);
+    eta = clamp(eta, 0.0, 1.0);
+    float x = clamp(hg_alpha_power_of_g(g), TIR_FIT_X_MIN, TIR_FIT_X_MAX);
+    float a = sqrt(x * sqrt(x));
+    float sin_i = sqrt(1.0 - mu * mu);
+    float d = sqrt(1.0 - eta * eta) + mu;
+    float shift = a * (c[2] + c[3] * (1.0 - mu) * (1.0 - mu)) * d;
+    float upper = eta - sin_i + shift;
+    float lower = eta + sin_i - shift;
+    float scale = max(a * (c[0] + c[1] * a) * d, TIR_FIT_MIN_SCALE);
+    float s2 = scale * scale;
+    float trapped = 1.0 - 0.5 * (upper * inversesqrt(s2 + upper * upper)
+                                 + lower * inversesqrt(s2 + lower * lower));
+    float rough = 1.0 - eta * eta * (c[4] + c[5] * eta * eta);
+    float k = c[6] * a * a;
+    return clamp(mix(trapped, rough, k / (1.0 + k)), 0.0, 1.0);
+}
+
+// Fraction of a lobe (incidence μ, HG asymmetry g) trapped by relative IOR η < 1. The table and
+// the analytic estimator take the lobe's GGX α; tir=fit takes g itself, which spares it the
+// α mapping's pow.
+float tir_fraction(float mu, float g, float eta) {
     if (TIR_MODE == TIR_NONE) {
         return 0.0;
     } else if (TIR_MODE == TIR_CONSTANT) {
         return TIR_CONSTANT_FRACTION;
-    } else if (TIR_MODE == TIR_ANALYTIC) {
+    } else if (TIR_MODE == TIR_FIT) {
+        return tir_fit(mu, g, eta);
+    }
+    float alpha = hg_alpha_of_g(g);
+    if (TIR_MODE == TIR_ANALYTIC) {
         return tir_analytic(mu, alpha, eta);
     }
     float n = float(LAMINA_TIR_SIZE);

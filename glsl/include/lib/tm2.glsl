@@ -154,11 +154,11 @@ void tm2_add(uint i, Tm2Factors c, float g_next, inout Tm2State s, inout vec3 tr
         c.gtp = hg_safe_ratio(g_t0j_rt, g_t0j_r);
         // Total internal reflection moves energy from transmission to reflection (§4.5).
         if (!tm_denser_at(i, c.eta)) {
-            real3 tau = real(tir_fraction(c.mu, hg_alpha_of_g(s.g_t0i), c.eta)) * c.t;
+            real3 tau = real(tir_fraction(c.mu, s.g_t0i, c.eta)) * c.t;
             c.r += tau;
             c.t -= tau;
         } else {
-            real3 tau = real(tir_fraction(c.mu_t, hg_alpha_of_g(g_t0j_r), 1.0 / c.eta)) * c.tp;
+            real3 tau = real(tir_fraction(c.mu_t, g_t0j_r, 1.0 / c.eta)) * c.tp;
             c.rp += tau;
             c.tp -= tau;
         }

@@ -388,14 +388,14 @@ bool tm6_step(uint step, uint layers, inout Tm6Walk w, inout vec3 transmittance)
             vec3 rs = r, ts = t, rsp = rp, tsp = tp;
             // Total internal reflection moves energy from transmission to reflection (§4.5).
             if (!tm_denser_at(i, eta)) {
-                vec3 tau = tir_fraction(w.cos_i, hg_alpha_of_g(w.g_t0i), eta) * t;
+                vec3 tau = tir_fraction(w.cos_i, w.g_t0i, eta) * t;
                 r += tau; t -= tau;
-                vec3 tau_s = tir_fraction(w.cos_i, hg_alpha_of_g(w.g_st0i), eta) * ts;
+                vec3 tau_s = tir_fraction(w.cos_i, w.g_st0i, eta) * ts;
                 rs += tau_s; ts -= tau_s;
             } else {
-                vec3 tau = tir_fraction(cos_below, hg_alpha_of_g(g_t0j_r), 1.0 / eta) * tp;
+                vec3 tau = tir_fraction(cos_below, g_t0j_r, 1.0 / eta) * tp;
                 rp += tau; tp -= tau;
-                vec3 tau_s = tir_fraction(cos_below, hg_alpha_of_g(g_st0j_r), 1.0 / eta) * tsp;
+                vec3 tau_s = tir_fraction(cos_below, g_st0j_r, 1.0 / eta) * tsp;
                 rsp += tau_s; tsp -= tau_s;
             }
             // Energies: lossless, 1 − r = t. Asymmetries: 1 − r as it is.
