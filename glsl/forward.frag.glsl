@@ -157,6 +157,209 @@ vec3 shade_baked(vec3 n, vec3 v, float n_dot_v) {
     return sum;
 }
 
+#ifdef LAMINA_REFERENCE
+#include "lib/equirect.glsl"
+#include "lib/sampling.glsl"
+
+// The reference image (`lamina render --reference`, src/render/reference.rs): each lobe of the
+// f64 model (FGD and TIR integrated exactly, tabulated finely over the view cosine in
+// baked_lobes: its weight divided by its white albedo E and √α, √α < 0 for a diffuse base's
+// lobe, then E in the next row)
+// integrated by Monte Carlo against the unfiltered environment (the cube's level 0) and the
+// lights (a disk light over its disk): REFERENCE_SAMPLES iterations per lobe per frame, each
+// one direction through the lobe and one from the environment's importance sampling
+// (reference_environment), seeded by the pixel and the frame (frame.params.z); the host
+// averages the frames. No split sum, no
+// prefiltering, no FGD table.
+const uint REFERENCE_SAMPLES = 16u;
+
+uint reference_state;
+
+// A 32-bit hash (PCG's output permutation of an LCG step).
+uint reference_hash(uint x) {
+    uint state = x * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// Uniform in [0, 1).
+float reference_random() {
+    reference_state = reference_hash(reference_state);
+    return float(reference_state >> 8u) * (1.0 / 16777216.0);
+}
+
+// The lobe's response to a unit irradiance from l, times μ_l, before its 1/E (already in the
+// table's weight): D·G2 / (4 μ_v), about `view` (the view, or its mirror image for a retro
+// lobe).
+float reference_lobe(vec3 n, vec3 view, vec3 l, float alpha) {
+    float n_dot_l = dot(n, l);
+    float n_dot_v = dot(n, view);
+    if (n_dot_l <= 0.0 || n_dot_v <= 0.0) {
+        return 0.0;
+    }
+    vec3 h = normalize(view + l);
+    return ggx_d(max(dot(n, h), 0.0), alpha) * masking_shadowing(n_dot_l, n_dot_v, alpha)
+        / (4.0 * n_dot_v);
+}
+
+// A direction within the cone of half-angle `radius` around `axis`, uniform in solid angle.
+vec3 reference_cone(vec3 axis, float radius) {
+    float cos_t = 1.0 - reference_random() * (1.0 - cos(radius));
+    float sin_t = sqrt(max(0.0, 1.0 - cos_t * cos_t));
+    float phi = TWO_PI * reference_random();
+    return basis(axis) * vec3(sin_t * cos(phi), sin_t * sin(phi), cos_t);
+}
+
+// The lights through a lobe: `diffuse`, μ_l/π; else reference_lobe about `view`. A disk light
+// averages its cone.
+vec3 reference_lights(vec3 n, vec3 view, float alpha, bool diffuse) {
+    vec3 sum = vec3(0.0);
+    uint count = LIGHTS != 0u ? light_info.x : 0u;
+    for (uint j = 0u; j < count; ++j) {
+        vec3 centre;
+        vec3 irradiance = light_at(j, centre);
+        float radius = lights[j].radiance.w;
+        uint samples = radius > 0.0 ? REFERENCE_SAMPLES : 1u;
+        float value = 0.0;
+        for (uint s = 0u; s < samples; ++s) {
+            vec3 l = radius > 0.0 ? reference_cone(centre, radius) : centre;
+            value += diffuse ? max(dot(n, l), 0.0) * INV_PI : reference_lobe(n, view, l, alpha);
+        }
+        sum += irradiance * (value / float(samples));
+    }
+    return sum;
+}
+
+// The environment's density at direction d (solid angle) under its importance sampling
+// (bindings/scene.glsl's EnvironmentSampling): the cell's probability over its solid angle.
+float reference_env_pdf(vec3 d) {
+    uvec2 grid = env_sampling_info.xy;
+    vec2 uv = equirect_uv(d);
+    uint i = min(uint(uv.y * float(grid.y)), grid.y - 1u);
+    uint j = min(uint(uv.x * float(grid.x)), grid.x - 1u);
+    // The CDFs' values before the cell, 0 for the first: indices clamped in bounds, since a
+    // select reads both of its sides.
+    float row = env_cdf[i] - env_cdf[max(i, 1u) - 1u] * float(i > 0u);
+    uint base = grid.y + i * grid.x;
+    float cell = env_cdf[base + j] - env_cdf[base + max(j, 1u) - 1u] * float(j > 0u);
+    float sin_t = sqrt(max(0.0, 1.0 - d.y * d.y));
+    return row * cell * float(grid.x * grid.y) / (2.0 * PI * PI * max(sin_t, 1e-6));
+}
+
+// The first index in [first, first + count) whose CDF value exceeds u (the last if none), by
+// bisection in a fixed number of steps (count ≤ 2¹⁶): a data-dependent `while` nested in the
+// caller's sample loop left lavapipe's fragments unwritten.
+uint reference_search(uint first, uint count, float u) {
+    uint lo = 0u;
+    uint hi = count - 1u;
+    for (uint step = 0u; step < 16u; ++step) {
+        uint mid = (lo + hi) / 2u;
+        bool above = env_cdf[first + mid] > u;
+        hi = lo < hi && above ? mid : hi;
+        lo = lo < hi && !above ? mid + 1u : lo;
+    }
+    return lo;
+}
+
+// A direction drawn from the environment's importance sampling: a row by its marginal CDF, a
+// cell of it by the row's CDF, a point uniform in the cell's (u, v).
+vec3 reference_env_sample() {
+    uvec2 grid = env_sampling_info.xy;
+    uint i = reference_search(0u, grid.y, reference_random());
+    uint j = reference_search(grid.y + i * grid.x, grid.x, reference_random());
+    vec2 uv = (vec2(j, i) + vec2(reference_random(), reference_random())) / vec2(grid);
+    float phi = (uv.x - 0.5) * TWO_PI;
+    float theta = uv.y * PI;
+    return vec3(sin(theta) * sin(phi), cos(theta), -sin(theta) * cos(phi));
+}
+
+// One sample's share under the balance heuristic: f·(L − c) / (pdf + the environment's pdf),
+// for a direction either technique drew (f: the lobe's f·μ_l; pdf: the lobe's density there;
+// c: the control variate, reference_environment).
+vec3 reference_mis(float f, float pdf, vec3 world, vec3 c) {
+    float both = pdf + reference_env_pdf(world);
+    return both > 0.0 ? f / both * (textureLod(prefiltered, world, 0.0).rgb - c) : vec3(0.0);
+}
+
+// The unfiltered environment through a lobe of roughness α about `view` (`diffuse`: μ_l/π),
+// by multiple importance sampling with the balance heuristic: per iteration one direction
+// through the lobe's visible normals (cosine-distributed for a diffuse lobe) and one from the
+// environment's importance sampling, each weighing f·μ_l / (pdf_lobe + pdf_env). A control
+// variate c takes out what the lobe's samples would spend estimating its own integral E
+// (which the table's weight already divides out): the estimate is c·E + Σ f·(L − c)/pdf,
+// unbiased for any c constant over the samples, and c is the prefiltered environment along
+// the lobe (the irradiance's over π for a diffuse lobe), so that only the environment's
+// departure from its filtered value is sampled. Under a uniform environment it is exact.
+vec3 reference_environment(vec3 n, vec3 view, float alpha, bool diffuse, float white) {
+    mat3 frame_of_n = basis(n);
+    vec3 v = transpose(frame_of_n) * view;
+    if (!diffuse && v.z <= 0.0) {
+        return vec3(0.0);
+    }
+    float g1 = 1.0 / (1.0 + smith_lambda(v.z, alpha));
+    vec3 c = diffuse
+        ? ibl_irradiance(n, frame.irradiance) * INV_PI
+        : lobe_radiance(n, reflect(-view, n), alpha);
+    vec3 sum = vec3(0.0);
+    for (uint s = 0u; s < REFERENCE_SAMPLES; ++s) {
+        // Through the lobe.
+        vec2 u = vec2(reference_random(), reference_random());
+        vec3 l;
+        if (diffuse) {
+            float r = sqrt(u.x);
+            float phi = TWO_PI * u.y;
+            l = vec3(r * cos(phi), r * sin(phi), sqrt(max(0.0, 1.0 - u.x)));
+        } else {
+            l = reflect(-v, sample_ggx_vndf(v, u, alpha));
+        }
+        if (l.z > 0.0) {
+            vec3 world = frame_of_n * l;
+            float f = diffuse ? l.z * INV_PI : reference_lobe(n, view, world, alpha);
+            float pdf = diffuse ? l.z * INV_PI : f * g1 / max(masking_shadowing(l.z, v.z, alpha), 1e-30);
+            sum += reference_mis(f, pdf, world, c);
+        }
+        // From the environment.
+        vec3 world = reference_env_sample();
+        float n_dot_l = dot(n, world);
+        if (n_dot_l > 0.0) {
+            float f;
+            float pdf;
+            if (diffuse) {
+                f = n_dot_l * INV_PI;
+                pdf = f;
+            } else {
+                vec3 h = normalize(view + world);
+                float d = ggx_d(max(dot(n, h), 0.0), alpha);
+                f = d * masking_shadowing(n_dot_l, v.z, alpha) / (4.0 * v.z);
+                pdf = g1 * d / (4.0 * v.z);
+            }
+            sum += reference_mis(f, pdf, world, c);
+        }
+    }
+    return c * white + sum / float(REFERENCE_SAMPLES);
+}
+
+vec3 shade_reference(vec3 n, vec3 v, float n_dot_v) {
+    float u = (sqrt(n_dot_v) * float(BAKED_SIZE - 1u) + 0.5) / float(BAKED_SIZE);
+    vec3 sum = vec3(0.0);
+    // Two rows per lobe (render/reference.rs): (weight / E, √α), then (E, 0, 0, 0).
+    float rows = float(2u * LOBE_COUNT);
+    for (uint k = 0u; k < LOBE_COUNT; ++k) {
+        vec4 lobe = textureLod(baked_lobes, vec2(u, (float(2u * k) + 0.5) / rows), 0.0);
+        float white = textureLod(baked_lobes, vec2(u, (float(2u * k) + 1.5) / rows), 0.0).r;
+        bool diffuse = lobe.a < 0.0;
+        float alpha = lobe.a * lobe.a;
+        vec3 view = tm_bit(RETRO_MASK, k) ? 2.0 * dot(n, v) * n - v : v;
+        vec3 radiance = reference_lights(n, view, alpha, diffuse);
+        if (frame.params.y > 0.0) {
+            radiance += frame.params.y * reference_environment(n, view, alpha, diffuse, white);
+        }
+        sum += lobe.rgb * radiance;
+    }
+    return sum;
+}
+#endif
+
 void main() {
     vec3 n = normalize(world_normal);
     vec3 v = normalize(frame.camera_pos.xyz - world_position);
@@ -166,6 +369,11 @@ void main() {
         tm_surface_begin(surface_uv, gl_FragCoord.xy);
     }
     vec3 radiance;
+#ifdef LAMINA_REFERENCE
+    reference_state = reference_hash(uint(gl_FragCoord.x)
+        ^ reference_hash(uint(gl_FragCoord.y) ^ reference_hash(uint(frame.params.z))));
+    radiance = shade_reference(n, v, n_dot_v);
+#else
     if (MODEL == MODEL_GGX) {
         radiance = shade_ggx(n, v, n_dot_v);
     } else if (MODE == MODE_BAKED) {
@@ -173,5 +381,6 @@ void main() {
     } else {
         radiance = shade_lobes(n, v, n_dot_v);
     }
+#endif
     color = vec4(radiance, 1.0);
 }

@@ -170,6 +170,28 @@ pub fn write_exr_rgba16f(
     })
 }
 
+/// Writes RGBA pixels (rows top to bottom) as a 32-bit float OpenEXR file (a reference image,
+/// whose averages are finer than a half float).
+pub fn write_exr_rgba32f(
+    path: &Path,
+    width: usize,
+    height: usize,
+    pixels: &[[f32; 4]],
+) -> Result<(), ImageIoError> {
+    assert_eq!(
+        pixels.len(),
+        width * height,
+        "pixel count must match the size"
+    );
+    write_atomically(path, |temp| {
+        exr::prelude::write_rgba_file(temp, width, height, |x, y| {
+            let p = pixels[y * width + x];
+            (p[0], p[1], p[2], p[3])
+        })
+        .map_err(|e| e.to_string())
+    })
+}
+
 /// Narkowicz 2015's fit of the ACES filmic curve.
 fn aces(x: f32) -> f32 {
     ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)

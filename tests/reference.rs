@@ -118,3 +118,98 @@ fn an_interrupted_reference_writes_nothing() {
     let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
     assert!(left.is_empty(), "left behind: {left:?}");
 }
+
+/// The reference image under a white environment is the white furnace: every pixel is the
+/// exact model's reflectance at its view cosine (each lobe normalised to its weight), to the
+/// pixel's own standard error, plus 1e-3 for the tabulation (the model at 512 cosines, its FGD
+/// and lobe albedos on 256² grids) and R's change over 3e-3 of μ (the shaded mesh's facets and
+/// interpolated normals against the CPU's exact sphere: inside, the image meets R to 1e-5; at
+/// the silhouette, pixels of one μ differ by 1e-3 among themselves).
+#[test]
+fn the_reference_image_of_a_white_furnace_is_the_model_reflectance() {
+    use lamina::imageio::HdrImage;
+    use lamina::model::fgd::ExactFgd;
+    use lamina::oracle::evaluate_model;
+    use lamina::reference::compare::ExactTir;
+    use lamina::render::furnace::sphere_cosine;
+    use lamina::render::reference::{self, Convergence, G2_FORM};
+    use lamina::render::{Renderer, TargetFormat};
+    use lamina::tables::environment::EnvDesc;
+    use std::sync::atomic::AtomicBool;
+
+    let gpu = common::gpu();
+    let white = HdrImage {
+        width: 64,
+        height: 32,
+        pixels: vec![[1.0; 4]; 64 * 32],
+    };
+    let desc = EnvDesc {
+        face_size: 32,
+        mip_count: 6,
+        samples: 16,
+    };
+    let size = 24;
+    let steps = 400;
+    for material in ["varnished-gold", "dusty-varnish", "glazed-ceramic"] {
+        let stack = lamina::material::Stack::resolve(material).unwrap();
+        let layers = stack.params();
+        let mut renderer = Renderer::with_target(&gpu, &white, desc, TargetFormat::Float).unwrap();
+        let image = reference::render(
+            &mut renderer,
+            stack.model,
+            &layers,
+            (size, size),
+            Convergence {
+                spp: 256,
+                noise: None,
+            },
+            &mut |_, _| {},
+            &AtomicBool::new(false),
+        )
+        .unwrap()
+        .unwrap();
+        // R (mean of RGB) at μ = i / steps.
+        let fgd = ExactFgd {
+            g2: G2_FORM,
+            resolution: 256,
+        };
+        let r: Vec<f64> = (0..=steps)
+            .map(|i| {
+                let mu = (f64::from(i) / f64::from(steps)).max(1e-4);
+                let e = evaluate_model(stack.model, &layers, mu, &fgd, &ExactTir);
+                e.reflectance.iter().sum::<f64>() / 3.0
+            })
+            .collect();
+        let (mut worst, mut checked) = (0.0f64, 0);
+        for y in 0..size {
+            for x in 0..size {
+                let dir = renderer.camera.ray(x, y, size, size);
+                let Some(mu) = sphere_cosine(renderer.camera.eye, dir) else {
+                    continue;
+                };
+                let t = mu * f64::from(steps);
+                let i = (t as usize).min(steps as usize - 1);
+                let want = r[i] + (r[i + 1] - r[i]) * (t - i as f64);
+                let slope = (r[i + 1] - r[i]).abs() * f64::from(steps);
+                let p = (y * size + x) as usize;
+                let got = image.pixels[p][..3]
+                    .iter()
+                    .map(|&c| f64::from(c))
+                    .sum::<f64>()
+                    / 3.0;
+                let err = (got - want).abs();
+                // 16 frames estimate the standard error: 5 of them allow for its own spread.
+                let bound = 5.0 * f64::from(image.std_error[p]) + 1e-3 + slope * 3e-3;
+                assert!(
+                    err <= bound,
+                    "{material} at ({x}, {y}), μ {mu:.3}: {got} vs {want} (bound {bound})"
+                );
+                worst = worst.max(err);
+                checked += 1;
+            }
+        }
+        assert!(checked > 150, "{material}: {checked} sphere pixels");
+        println!("{material}: worst |reference − R(μ)| {worst:.2e} over {checked} pixels");
+    }
+    common::assert_validation_clean(&gpu);
+}

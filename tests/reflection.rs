@@ -277,7 +277,13 @@ fn kernels() -> Vec<KernelInterface> {
 /// The define sets an entry point is compiled with: the shading passes also in fp16.
 fn define_sets(entry: &str) -> Vec<Vec<(&'static str, &'static str)>> {
     let shades = ["forward.frag.glsl", "tm_eval.comp.glsl"];
-    if shades.contains(&entry) {
+    if entry == "forward.frag.glsl" {
+        vec![
+            vec![],
+            vec![("LAMINA_FP16", "1")],
+            vec![("LAMINA_REFERENCE", "1")],
+        ]
+    } else if shades.contains(&entry) {
         vec![vec![], vec![("LAMINA_FP16", "1")]]
     } else {
         vec![vec![]]
@@ -295,9 +301,14 @@ fn same_kind(host: BindingKind, shader: DescriptorType) -> bool {
 }
 
 /// Every descriptor the shader declares is in the host's layout with the same type, and every
-/// binding of the sets in `whole` is declared (the optimizer drops what a stage never reads,
-/// so a shared set may be declared in part).
-fn check_sets(entry: &str, spirv: &Spirv, host: &BTreeMap<u32, Vec<BindingKind>>, whole: &[u32]) {
+/// (set, binding) in `required` is declared (the optimizer drops what a stage never reads, so
+/// a shared set may be declared in part).
+fn check_sets(
+    entry: &str,
+    spirv: &Spirv,
+    host: &BTreeMap<u32, Vec<BindingKind>>,
+    required: &[(u32, u32)],
+) {
     let declared = spirv.descriptors();
     for (&(set, binding), &ty) in &declared {
         let kind = host
@@ -311,13 +322,11 @@ fn check_sets(entry: &str, spirv: &Spirv, host: &BTreeMap<u32, Vec<BindingKind>>
             "{entry}: set {set} binding {binding}: shader {ty:?}, host {kind:?}"
         );
     }
-    for set in whole {
-        for binding in 0..host[set].len() as u32 {
-            assert!(
-                declared.contains_key(&(*set, binding)),
-                "{entry}: the host binds set {set} binding {binding}, the shader declares none"
-            );
-        }
+    for &(set, binding) in required {
+        assert!(
+            declared.contains_key(&(set, binding)),
+            "{entry}: the host binds set {set} binding {binding}, the shader declares none"
+        );
     }
 }
 
@@ -365,7 +374,10 @@ fn every_compute_kernel_matches_its_interface() {
         for defines in define_sets(k.entry) {
             let spirv = Spirv::compile(&compiler, k.entry, &defines);
             let entry = format!("{} {defines:?}", k.entry);
-            check_sets(&entry, &spirv, &sets, &[k.own_set()]);
+            let own = k.own_set();
+            let required: Vec<(u32, u32)> =
+                (0..sets[&own].len() as u32).map(|b| (own, b)).collect();
+            check_sets(&entry, &spirv, &sets, &required);
 
             match spirv.push_struct() {
                 None => assert_eq!(k.push.size, 0, "{entry}: host pushes, shader reads none"),
@@ -427,13 +439,20 @@ fn graphics_passes_declare_the_shading_and_scene_sets() {
             let spirv = Spirv::compile(&compiler, entry, &defines);
             let name = format!("{entry} {defines:?}");
             // Each stage declares part of the pipeline layout, as the host lays it out; the
-            // fragment pass that shades declares both sets whole.
-            let whole: &[u32] = if entry == "forward.frag.glsl" {
-                &[SHADING_SET, SCENE_SET]
+            // fragment pass that shades declares both sets whole but the environment's
+            // sampling (scene binding 3), which only the reference pass reads (then with the
+            // whole scene set and the lobe table, shading binding 5).
+            let all = |set: u32| (0..sets[&set].len() as u32).map(move |b| (set, b));
+            let required: Vec<(u32, u32)> = if entry != "forward.frag.glsl" {
+                Vec::new()
+            } else if defines.contains(&("LAMINA_REFERENCE", "1")) {
+                all(SCENE_SET).chain([(SHADING_SET, 5)]).collect()
             } else {
-                &[]
+                all(SHADING_SET)
+                    .chain(all(SCENE_SET).filter(|&(_, b)| b != 3))
+                    .collect()
             };
-            check_sets(&name, &spirv, &sets, whole);
+            check_sets(&name, &spirv, &sets, &required);
             assert!(spirv.push_struct().is_none(), "{name}: push constants");
             for id in spirv.spec_ids() {
                 assert!(shade_ids.contains(&id), "{name}: spec constant {id} unset");
@@ -479,7 +498,11 @@ fn array(spirv: &Spirv, id: u32) -> (u32, u32, u32) {
 fn material_and_frame_blocks_have_the_host_layout() {
     let compiler = ShaderCompiler::new().unwrap();
     let at = |o: usize| o as u32;
-    for defines in define_sets("forward.frag.glsl") {
+    // The reference pass reads no material (its lobes come from a table).
+    let shading = define_sets("forward.frag.glsl")
+        .into_iter()
+        .filter(|d| !d.contains(&("LAMINA_REFERENCE", "1")));
+    for defines in shading {
         let spirv = Spirv::compile(&compiler, "forward.frag.glsl", &defines);
 
         let material = wrapped(&spirv, spirv.block(SHADING_SET, 0));

@@ -25,6 +25,7 @@ mod tables;
 mod view;
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
@@ -144,6 +145,31 @@ impl GlobalArgs {
     fn open_gpu(&self) -> Result<Gpu> {
         Ok(Gpu::new(self.instance(false), &self.selector())?)
     }
+}
+
+/// Set by Ctrl-C once [`stop_on_interrupt`] ran: a long run stops at its next step and writes
+/// nothing.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+extern "C" fn on_interrupt(_: libc::c_int) {
+    INTERRUPTED.store(true, Ordering::Relaxed);
+    // SAFETY: signal() is async-signal-safe; a second Ctrl-C then ends the process at once.
+    unsafe {
+        libc::signal(libc::SIGINT, libc::SIG_DFL);
+    }
+}
+
+/// Routes Ctrl-C to the flag it returns, which a long run polls.
+fn stop_on_interrupt() -> &'static AtomicBool {
+    // SAFETY: `on_interrupt` only stores an atomic and calls signal(), both async-signal-safe;
+    // the handler is a valid `extern "C" fn(c_int)` for the process's lifetime.
+    unsafe {
+        libc::signal(
+            libc::SIGINT,
+            on_interrupt as extern "C" fn(libc::c_int) as libc::sighandler_t,
+        );
+    }
+    &INTERRUPTED
 }
 
 /// Fails when the validation layer reported anything over the run.

@@ -3,7 +3,7 @@
 //! progress bar; Ctrl-C stops it without writing anything.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -12,6 +12,8 @@ use lamina::material::Stack;
 use lamina::reference::{self, Reference, Settings};
 use lamina::variant::{Axis, Model, G2};
 use serde::Serialize;
+
+use super::stop_on_interrupt;
 
 #[derive(clap::Args)]
 pub struct ReferenceArgs {
@@ -59,29 +61,6 @@ struct ReferenceReport<'a> {
     samples: &'a [Reference],
 }
 
-/// Set by Ctrl-C: the run stops at its next batch of paths.
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
-
-extern "C" fn on_interrupt(_: libc::c_int) {
-    INTERRUPTED.store(true, Ordering::Relaxed);
-    // SAFETY: signal() is async-signal-safe; a second Ctrl-C then ends the process at once.
-    unsafe {
-        libc::signal(libc::SIGINT, libc::SIG_DFL);
-    }
-}
-
-/// Routes Ctrl-C to [`INTERRUPTED`].
-fn stop_on_interrupt() {
-    // SAFETY: `on_interrupt` only stores an atomic and calls signal(), both async-signal-safe;
-    // the handler is a valid `extern "C" fn(c_int)` for the process's lifetime.
-    unsafe {
-        libc::signal(
-            libc::SIGINT,
-            on_interrupt as extern "C" fn(libc::c_int) as libc::sighandler_t,
-        );
-    }
-}
-
 pub fn run(args: &ReferenceArgs) -> Result<()> {
     let stack = Stack::resolve(&args.material)?;
     stack.require_uniform("`lamina reference`")?;
@@ -110,13 +89,13 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
         .progress_chars("=> "),
     );
     bar.set_prefix("reference");
-    stop_on_interrupt();
+    let stop = stop_on_interrupt();
     let done = AtomicU64::new(0);
     let mut samples = Vec::with_capacity(args.cosines.len());
     for &mu in &args.cosines {
         let before = done.load(Ordering::Relaxed);
         let mut progress = |paths: u64| bar.set_position(before + paths);
-        let result = reference::simulate(&layers, &settings, mu, &mut progress, &INTERRUPTED)?;
+        let result = reference::simulate(&layers, &settings, mu, &mut progress, stop)?;
         let Some(result) = result else {
             bar.abandon();
             anyhow::bail!(

@@ -4,13 +4,17 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
 use lamina::imageio;
-use lamina::material::resolve_with_variant;
-use lamina::render::Renderer;
+use lamina::material::{resolve_with_variant, Stack};
+use lamina::render::reference;
+use lamina::render::{Renderer, TargetFormat};
 use lamina::tables::environment::EnvDesc;
 
 use super::args::{self, SceneArgs, SceneDefaults};
-use super::{asset_path, print_pipelines, save_pipelines, GlobalArgs};
+use super::{
+    asset_path, check_validation, print_pipelines, save_pipelines, stop_on_interrupt, GlobalArgs,
+};
 
 #[derive(clap::Args)]
 pub struct RenderArgs {
@@ -29,6 +33,18 @@ pub struct RenderArgs {
     /// Exposure of the PNG, in stops (-24 to 24).
     #[arg(long, default_value = "0", allow_negative_numbers = true, value_parser = args::exposure)]
     exposure: f32,
+    /// Render the reference image instead: the exact model's lobes integrated by Monte Carlo
+    /// against the unfiltered environment and the lights — no split sum, no prefiltering, no
+    /// FGD table (`render::reference`). Takes no --variant.
+    #[arg(long)]
+    reference: bool,
+    /// With --reference: samples per lobe and pixel (whole frames of 16).
+    #[arg(long, value_name = "N", default_value_t = 1024, requires = "reference")]
+    spp: u32,
+    /// With --reference: stop earlier once the image's relative noise (RMS standard error
+    /// over mean radiance) is at most this, e.g. 0.005.
+    #[arg(long, value_name = "X", requires = "reference")]
+    noise: Option<f64>,
 }
 
 pub struct RenderScene;
@@ -42,6 +58,9 @@ impl SceneDefaults for RenderScene {
 }
 
 pub fn run(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
+    if args.reference {
+        return run_reference(global, args);
+    }
     let scene = &args.scene;
     let env_path = asset_path(&scene.env);
     let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
@@ -109,5 +128,88 @@ pub fn run(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
         args.png.display()
     );
     save_pipelines(&gpu);
+    Ok(())
+}
+
+/// `--reference`: the reference image, progressive, with a progress bar; nothing is written
+/// when Ctrl-C stops it.
+fn run_reference(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
+    let scene = &args.scene;
+    if scene.variant.is_some() {
+        anyhow::bail!(
+            "--reference renders the exact model, which has no variant; leave out --variant"
+        );
+    }
+    let convergence = reference::Convergence {
+        spp: args.spp,
+        noise: args.noise,
+    };
+    convergence.check()?;
+    let env_path = asset_path(&scene.env);
+    let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
+    let stack = Stack::resolve(&scene.material)?;
+    stack.require_uniform("`lamina render --reference`")?;
+    let layers = stack.params();
+    let gpu = global.open_gpu()?;
+    let mut renderer =
+        Renderer::with_target(&gpu, &equirect, EnvDesc::default(), TargetFormat::Float)?;
+    renderer.lighting = scene.lights.lighting()?;
+    let (width, height) = (scene.size.width, scene.size.height);
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{prefix:>12} [{bar:30}] {pos}/{len} frames of 16 samples ({elapsed}, ETA {eta})",
+        )
+        .expect("a valid template")
+        .progress_chars("=> "),
+    );
+    bar.set_prefix("reference");
+    eprintln!(
+        "tabulating the exact model at {} view cosines…",
+        reference::TABLE_SIZE
+    );
+    let stop = stop_on_interrupt();
+    let image = reference::render(
+        &mut renderer,
+        stack.model,
+        &layers,
+        (width, height),
+        convergence,
+        &mut |done, total| {
+            bar.set_length(u64::from(total));
+            bar.set_position(u64::from(done));
+        },
+        stop,
+    )?;
+    let Some(image) = image else {
+        bar.abandon();
+        anyhow::bail!("interrupted; nothing was written");
+    };
+    bar.finish_and_clear();
+    check_validation(&gpu)?;
+    let (w, h) = (image.width as usize, image.height as usize);
+    imageio::write_exr_rgba32f(&args.out, w, h, &image.pixels)?;
+    imageio::write_png_tonemapped(&args.png, w, h, &image.pixels, args.exposure)?;
+    println!(
+        "device:      {} ({})",
+        gpu.device.report.name, gpu.device.report.driver_info
+    );
+    println!("environment: {}", env_path.display());
+    println!(
+        "material:    {} ({}, {} layers)",
+        stack.name,
+        stack.model,
+        stack.layers.len()
+    );
+    println!("size:        {width}x{height}");
+    println!(
+        "reference:   {} samples per lobe and pixel, relative noise {:.2e}",
+        image.spp, image.noise
+    );
+    println!(
+        "wrote:       {}, {}",
+        args.out.display(),
+        args.png.display()
+    );
     Ok(())
 }

@@ -34,7 +34,7 @@ const LOBE_GRID: u32 = 256;
 const TIR_GRID: u32 = 128;
 
 /// The TIR correction from the exact trapped fraction (no table).
-struct ExactTir;
+pub struct ExactTir;
 
 impl Tir for ExactTir {
     fn tir(&self, mu: f64, alpha: f64, eta: f64) -> f64 {

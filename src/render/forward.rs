@@ -20,6 +20,9 @@ pub struct PassMaterial {
     pub layers: Vec<LayerParams>,
     /// `mode=baked`: the lobe table, on the host and in the texture the pass reads.
     pub baked: Option<(BakedTable, BakedTexture)>,
+    /// A reference pass (`render::reference`): `baked` holds the exact model's lobes, which
+    /// it integrates by Monte Carlo (`LAMINA_REFERENCE`).
+    pub reference: bool,
 }
 
 pub struct ForwardPass {
@@ -53,7 +56,10 @@ impl ForwardPass {
                 gpu.device.report.name
             )));
         }
-        let defines = variant.defines();
+        let mut defines = variant.defines();
+        if material.as_ref().is_some_and(|m| m.reference) {
+            defines.push(("LAMINA_REFERENCE", "1"));
+        }
         let vertex = gpu.shaders.compile(ENTRIES[0], &defines)?;
         let fragment = gpu.shaders.compile(ENTRIES[1], &defines)?;
         let desc = GraphicsDesc {

@@ -88,7 +88,7 @@ pub fn gpu(
 
 /// n·v where the ray hits the unit sphere at the origin, for rays that stay clear of the
 /// silhouette (whose pixels mix sphere and background).
-fn sphere_cosine(eye: Vec3, dir: Vec3) -> Option<f64> {
+pub fn sphere_cosine(eye: Vec3, dir: Vec3) -> Option<f64> {
     let (eye, dir) = (eye.as_dvec3(), dir.as_dvec3());
     let b = eye.dot(dir);
     let closest = eye - b * dir;

@@ -6,6 +6,7 @@ pub mod forward;
 pub mod furnace;
 pub mod inputs;
 pub mod lights;
+pub mod reference;
 pub mod renderer;
 pub mod scene;
 pub mod sheet;

@@ -87,6 +87,8 @@ pub struct Renderer<'g> {
     pub camera: Camera,
     /// The environment's scale and the analytic lights (the environment alone by default).
     pub lighting: Lighting,
+    /// The frame's index, which seeds a reference pass's samples (`render::reference`).
+    pub frame_index: u32,
     /// The maps of every spatially varying stack set so far ([`Renderer::set_surface`]), and
     /// the one passes are prepared and frames rendered for (`None`: uniform stacks).
     surfaces: Vec<SurfaceTexture>,
@@ -151,6 +153,7 @@ impl<'g> Renderer<'g> {
             target,
             camera: Camera::default(),
             lighting: Lighting::default(),
+            frame_index: 0,
             surfaces: Vec::new(),
             current_surface: None,
         })
@@ -273,6 +276,57 @@ impl<'g> Renderer<'g> {
             Some(PassMaterial {
                 layers: layers.to_vec(),
                 baked,
+                reference: false,
+            }),
+        )
+    }
+
+    /// The reference pass of the uniform stack `layers` in `model` (`render::reference`),
+    /// reading the exact model's lobes from `table`.
+    pub fn prepare_reference(
+        &mut self,
+        model: Model,
+        layers: &[LayerParams],
+        table: BakedTable,
+    ) -> Result<ForwardPass> {
+        if self.current_surface.is_some() {
+            return Err(Error::Unsupported(
+                "this stack varies over the surface (textures, patterns or coverage); the \
+                 reference renders uniform stacks"
+                    .into(),
+            ));
+        }
+        if self.target != TargetFormat::Float {
+            return Err(Error::Unsupported(
+                "a reference pass averages frames finer than a half float: render it into a \
+                 float target (TargetFormat::Float)"
+                    .into(),
+            ));
+        }
+        let variant = VariantKey {
+            model,
+            mode: Mode::Baked,
+            ..VariantKey::default()
+        };
+        self.inputs.prepare(variant)?;
+        let mut spec = variant.spec();
+        // Two rows per lobe (`render::reference::lobe_table`).
+        spec.lobe_count = table.shape.lobe_count / 2;
+        spec.retro_mask = table.shape.retro_mask;
+        spec.baked_size = table.shape.size;
+        spec.lights = u32::from(!self.lighting.lights.is_empty());
+        spec.diffuse_base = u32::from(crate::model::ends_diffuse(layers));
+        let texture = table.upload(self.gpu, "reference lobes")?;
+        ForwardPass::new(
+            self.gpu,
+            &self.layout,
+            self.target.format(),
+            variant,
+            &spec,
+            Some(PassMaterial {
+                layers: layers.to_vec(),
+                baked: Some((table, texture)),
+                reference: true,
             }),
         )
     }
@@ -340,7 +394,7 @@ impl<'g> Renderer<'g> {
             params: [
                 self.environment.desc.mip_count as f32,
                 self.lighting.environment as f32,
-                0.0,
+                self.frame_index as f32,
                 0.0,
             ],
             irradiance: self.environment.irradiance,
@@ -375,7 +429,8 @@ impl<'g> Renderer<'g> {
         scene
             .write(0, Resource::Buffer(&uniforms))
             .write(1, Resource::Sampled(&self.environment.view, &self.sampler))
-            .write(2, Resource::Buffer(&lights));
+            .write(2, Resource::Buffer(&lights))
+            .write(3, Resource::Buffer(&self.environment.sampling));
 
         let format = self.target.format();
         let target = Image::new(

@@ -268,7 +268,7 @@ pub fn material_buffer(
 pub const SCENE_SET: u32 = 1;
 
 /// The scene set's bindings, as `glsl/include/bindings/scene.glsl` declares them.
-pub const SCENE_BINDINGS: [Binding; 3] = [
+pub const SCENE_BINDINGS: [Binding; 4] = [
     Binding {
         binding: 0,
         kind: BindingKind::UniformBuffer,
@@ -283,6 +283,11 @@ pub const SCENE_BINDINGS: [Binding; 3] = [
         binding: 2,
         kind: BindingKind::StorageBuffer,
         name: "Lights",
+    },
+    Binding {
+        binding: 3,
+        kind: BindingKind::StorageBuffer,
+        name: "EnvironmentSampling",
     },
 ];
 

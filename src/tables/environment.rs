@@ -17,8 +17,8 @@ use crate::gpu::{ComputeKernel, Gpu};
 use crate::imageio::HdrImage;
 use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_2D};
 use crate::vk::{
-    submit_and_wait, upload_image, BindingKind, DescriptorSet, Format, Image, ImageDesc,
-    ImageState, ImageUsageFlags, ImageView, Resource, Sampler, SamplerDesc,
+    submit_and_wait, upload_image, BindingKind, Buffer, BufferUsageFlags, DescriptorSet, Format,
+    Image, ImageDesc, ImageState, ImageUsageFlags, ImageView, Resource, Sampler, SamplerDesc,
 };
 
 /// Size and quality of the prefiltered cube.
@@ -91,6 +91,8 @@ pub struct Environment {
     /// The irradiance's order-2 spherical harmonics ([`irradiance_sh`]), which the forward
     /// pass lights a diffuse base with.
     pub irradiance: [[f32; 4]; 9],
+    /// [`sampling_tables`], the scene set's `EnvironmentSampling`.
+    pub sampling: Buffer,
 }
 
 impl Environment {
@@ -259,6 +261,12 @@ impl Environment {
             view,
             desc,
             irradiance: irradiance_sh(equirect),
+            sampling: Buffer::with_data(
+                device,
+                BufferUsageFlags::STORAGE_BUFFER,
+                &sampling_tables(equirect),
+                "environment sampling",
+            )?,
         })
     }
 
@@ -351,6 +359,54 @@ pub fn cube_direction(face: u32, u: f64, v: f64) -> DVec3 {
         _ => DVec3::new(-x, -y, -1.0),
     };
     d.normalize()
+}
+
+/// Columns and rows of the grid [`sampling_tables`] tabulates (fewer for a smaller image: one
+/// cell per texel).
+pub const SAMPLING_GRID: (u32, u32) = (256, 128);
+
+/// The environment's importance sampling, as `bindings/scene.glsl`'s `EnvironmentSampling`
+/// reads it: a header (the grid's columns and rows, 0, 0) then, over [`SAMPLING_GRID`]'s
+/// equirect cells, each weighted by its mean radiance (mean of RGB) times sin θ at its centre
+/// (its share of the sphere), the rows' marginal CDF and each row's CDF over its cells, as
+/// f32 bits. Every cell also gets 10⁻⁴ of the mean weight, so that no direction the
+/// environment lights has zero density.
+pub fn sampling_tables(equirect: &HdrImage) -> Vec<u32> {
+    let (w, h) = (equirect.width, equirect.height);
+    let (cols, rows) = (SAMPLING_GRID.0.min(w as u32), SAMPLING_GRID.1.min(h as u32));
+    let mut weight = vec![0.0f64; (cols * rows) as usize];
+    for (k, p) in equirect.pixels.iter().enumerate() {
+        let (x, y) = (k % w, k / w);
+        let cell = (y * rows as usize / h) * cols as usize + x * cols as usize / w;
+        weight[cell] += f64::from(p[0] + p[1] + p[2]) / 3.0;
+    }
+    for i in 0..rows as usize {
+        let sin = ((i as f64 + 0.5) / f64::from(rows) * PI).sin();
+        for wgt in &mut weight[i * cols as usize..(i + 1) * cols as usize] {
+            *wgt *= sin;
+        }
+    }
+    let floor = 1e-4 * weight.iter().sum::<f64>() / weight.len() as f64 + f64::MIN_POSITIVE;
+    weight.iter_mut().for_each(|w| *w += floor);
+    let row_sums: Vec<f64> = weight
+        .chunks(cols as usize)
+        .map(|row| row.iter().sum())
+        .collect();
+    let total: f64 = row_sums.iter().sum();
+    let mut out = vec![cols, rows, 0, 0];
+    let mut running = 0.0;
+    for s in &row_sums {
+        running += s;
+        out.push(((running / total) as f32).to_bits());
+    }
+    for (row, sum) in weight.chunks(cols as usize).zip(&row_sums) {
+        let mut running = 0.0;
+        for w in row {
+            running += w;
+            out.push(((running / sum) as f32).to_bits());
+        }
+    }
+    out
 }
 
 /// Equirect texture coordinates of unit direction `d`: the CPU mirror of `equirect_uv` in

@@ -16,5 +16,12 @@ layout(set = 1, binding = 2, std430) readonly buffer Lights {
     uvec4 light_info;  // x: light count
     LightGpu lights[];
 };
+// The environment's importance sampling (tables::environment::sampling_tables): over a grid of
+// x × y equirect cells, the marginal CDF of the rows (y floats), then each row's CDF over its
+// cells (x floats per row). A reference pass draws environment directions from it.
+layout(set = 1, binding = 3, std430) readonly buffer EnvironmentSampling {
+    uvec4 env_sampling_info;  // x, y: the grid
+    float env_cdf[];
+};
 
 #endif

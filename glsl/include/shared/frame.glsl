@@ -8,7 +8,8 @@ struct FrameConstants {
     mat4 inv_view_proj;
     vec4 camera_pos;     // xyz: world-space eye
     vec4 params;         // x: mip count of the prefiltered environment; y: the environment's
-                         // scale (0: lights only); z, w: unused
+                         // scale (0: lights only); z: the frame's index, seeding a
+                         // reference pass (render/reference.rs); w: unused
     vec4 irradiance[9];  // rgb: the environment's irradiance in order-2 spherical harmonics,
                          // each coefficient times its band's cosine-lobe factor (lib/ibl.glsl)
 };

@@ -1,0 +1,294 @@
+//! Reference images (`lamina render --reference`): the scene with each pixel's lobes — those
+//! of the f64 model with its FGD and TIR correction integrated exactly — integrated against
+//! the environment and the lights by Monte Carlo on the GPU (`forward.frag.glsl` under
+//! `LAMINA_REFERENCE`): no split sum, no prefiltering, no FGD table, no fp16. What a variant's
+//! image differs from it by is the error of its real-time approximations alone; the model's
+//! own error is the reference study's (`reference::compare`).
+//!
+//! The model runs on the host at [`TABLE_SIZE`] view cosines (uniform in √μ, as a baked
+//! table: `render::baked`) with the masking form [`G2`] (height-correlated, GGX D): each lobe's
+//! weight divided by the albedo E of its white GGX lobe (so that each lobe's samples need no
+//! table), its α floored at the lights' [`MIN_ALPHA`]. The pass interpolates between samples
+//! (the baked table's error study: below 5e-4 at 512 samples). Each frame draws
+//! [`SAMPLES_PER_FRAME`] samples per lobe and light disk per pixel; the host averages frames
+//! in f64 and estimates each pixel's standard error from their spread.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::model::fgd::ExactFgd;
+use crate::model::light::{lobe_albedo, MIN_ALPHA};
+use crate::model::LayerParams;
+use crate::oracle::evaluate_model;
+use crate::reference::compare::ExactTir;
+use crate::shader::specialize::{BakedShape, MAX_BAKED_LOBES};
+use crate::variant::{Model, G2};
+
+use super::baked::{sample_cos, BakedTable};
+use super::Renderer;
+
+/// View cosines the host evaluates the model at.
+pub const TABLE_SIZE: u32 = 512;
+
+/// The masking form of the reference's lobes and FGD.
+pub const G2_FORM: G2 = G2::HeightCorrelated;
+
+/// Samples per lobe (and per light disk) per pixel and frame: `REFERENCE_SAMPLES` in
+/// `forward.frag.glsl`.
+pub const SAMPLES_PER_FRAME: u32 = 16;
+
+/// Most samples per lobe a reference takes.
+pub const MAX_SPP: u32 = 1 << 20;
+
+/// Grid side of the exact FGD integral at each tabulated cosine.
+const FGD_GRID: u32 = 256;
+
+/// The exact model's lobes over the view cosine, as the reference pass reads them: two rows per
+/// lobe, (weight / E, √α) then (E, 0, 0, 0) per sample, √α = −1 for a diffuse base's lobe
+/// (E = 1). The table's `lobe_count` counts rows; its `retro_mask`, lobes.
+pub fn lobe_table(model: Model, layers: &[LayerParams]) -> Result<BakedTable> {
+    let fgd = ExactFgd {
+        g2: G2_FORM,
+        resolution: FGD_GRID,
+    };
+    let size = TABLE_SIZE;
+    let evaluations: Vec<_> = (0..size)
+        .into_par_iter()
+        .map(|j| evaluate_model(model, layers, sample_cos(j, size), &fgd, &ExactTir))
+        .collect();
+    let first = &evaluations[0];
+    if evaluations
+        .iter()
+        .any(|e| e.lobes.len() != first.lobes.len() || e.retro_mask != first.retro_mask)
+    {
+        return Err(Error::Unsupported(
+            "the model emitted a different lobe set at different view cosines; the reference \
+             needs one lobe set"
+                .into(),
+        ));
+    }
+    let kept: Vec<usize> = (0..first.lobes.len())
+        .filter(|&k| {
+            evaluations
+                .iter()
+                .any(|e| e.lobes[k].weight.iter().any(|&w| w > 0.0))
+        })
+        .collect();
+    if kept.len() > MAX_BAKED_LOBES {
+        return Err(Error::Unsupported(format!(
+            "the reference holds at most {MAX_BAKED_LOBES} lobes; the stack has {}",
+            kept.len()
+        )));
+    }
+    let mut retro_mask = 0;
+    for (slot, &k) in kept.iter().enumerate() {
+        if k < 32 && first.retro_mask & (1 << k) != 0 {
+            retro_mask |= 1 << slot;
+        }
+    }
+    let rows: Vec<[[f32; 4]; 2]> = (0..kept.len() * size as usize)
+        .into_par_iter()
+        .map(|t| {
+            let (k, j) = (kept[t / size as usize], t % size as usize);
+            let lobe = evaluations[j].lobes[k];
+            let w = lobe.weight;
+            if lobe.diffuse {
+                return [
+                    [w[0] as f32, w[1] as f32, w[2] as f32, -1.0],
+                    [1.0, 0.0, 0.0, 0.0],
+                ];
+            }
+            let alpha = lobe.roughness.max(MIN_ALPHA);
+            let white = lobe_albedo(G2_FORM, sample_cos(j as u32, size), alpha);
+            let w = w.map(|w| (w / white) as f32);
+            [
+                [w[0], w[1], w[2], alpha.sqrt() as f32],
+                [white as f32, 0.0, 0.0, 0.0],
+            ]
+        })
+        .collect();
+    // Lobe k's first row, then its second.
+    let mut texels = Vec::with_capacity(rows.len() * 2);
+    for lobe in rows.chunks(size as usize) {
+        texels.extend(lobe.iter().map(|r| r[0]));
+        texels.extend(lobe.iter().map(|r| r[1]));
+    }
+    Ok(BakedTable {
+        shape: BakedShape {
+            lobe_count: 2 * kept.len() as u32,
+            retro_mask,
+            size,
+        },
+        texels,
+        kept,
+    })
+}
+
+/// A converged reference image.
+pub struct ReferenceImage {
+    pub width: u32,
+    pub height: u32,
+    /// Linear radiance, rows top to bottom (alpha 1).
+    pub pixels: Vec<[f32; 4]>,
+    /// Each pixel's standard error (mean of RGB), from the spread of its frames.
+    pub std_error: Vec<f32>,
+    /// Samples per lobe per pixel.
+    pub spp: u32,
+    /// The image's relative noise: the RMS over the pixels that vary between frames of each
+    /// one's standard error over its radiance (mean of RGB; radiances below 1 % of the image's
+    /// mean count as that), so a few bright pixels do not hide the rest.
+    pub noise: f64,
+}
+
+/// When a reference stops.
+#[derive(Clone, Copy, Debug)]
+pub struct Convergence {
+    /// Samples per lobe per pixel at most (rounded up to whole frames).
+    pub spp: u32,
+    /// Stop earlier once [`ReferenceImage::noise`] is at most this (checked from the fourth
+    /// frame on).
+    pub noise: Option<f64>,
+}
+
+impl Convergence {
+    /// Refuses sample counts outside 1..=[`MAX_SPP`] and noise targets outside (0, 1).
+    pub fn check(&self) -> Result<()> {
+        if self.spp == 0 || self.spp > MAX_SPP {
+            return Err(Error::Unsupported(format!(
+                "--spp {}: a reference takes 1 to {MAX_SPP} samples per lobe and pixel",
+                self.spp
+            )));
+        }
+        if let Some(n) = self.noise {
+            if !(n.is_finite() && n > 0.0 && n < 1.0) {
+                return Err(Error::Unsupported(format!(
+                    "--noise {n}: give a relative noise in (0, 1), e.g. 0.01"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Per-pixel sums of the frames' values and of their squares, in f64.
+struct Accumulator {
+    sum: Vec<[f64; 3]>,
+    sum_sq: Vec<[f64; 3]>,
+    frames: u32,
+}
+
+impl Accumulator {
+    fn new(pixels: usize) -> Self {
+        Self {
+            sum: vec![[0.0; 3]; pixels],
+            sum_sq: vec![[0.0; 3]; pixels],
+            frames: 0,
+        }
+    }
+
+    fn add(&mut self, pixels: &[[f32; 4]]) {
+        for ((s, q), p) in self.sum.iter_mut().zip(&mut self.sum_sq).zip(pixels) {
+            for c in 0..3 {
+                let v = f64::from(p[c]);
+                s[c] += v;
+                q[c] += v * v;
+            }
+        }
+        self.frames += 1;
+    }
+
+    /// The mean image, each pixel's standard error and the image's relative noise
+    /// ([`ReferenceImage`]).
+    fn estimate(&self) -> (Vec<[f32; 4]>, Vec<f32>, f64) {
+        let n = f64::from(self.frames);
+        let mut pixels = Vec::with_capacity(self.sum.len());
+        let mut errors = Vec::with_capacity(self.sum.len());
+        let mut means = Vec::with_capacity(self.sum.len());
+        for (s, q) in self.sum.iter().zip(&self.sum_sq) {
+            let mean = s.map(|v| v / n);
+            let mut se2 = 0.0;
+            for c in 0..3 {
+                // The frames' unbiased variance, over the frame count: the mean's.
+                let variance = (q[c] / n - mean[c] * mean[c]).max(0.0) * n / (n - 1.0).max(1.0);
+                se2 += variance / n / 3.0;
+            }
+            pixels.push([mean[0] as f32, mean[1] as f32, mean[2] as f32, 1.0]);
+            errors.push(se2.sqrt() as f32);
+            means.push((mean[0] + mean[1] + mean[2]) / 3.0);
+        }
+        let floor = 0.01 * means.iter().sum::<f64>() / means.len().max(1) as f64;
+        let (mut sum, mut count) = (0.0, 0usize);
+        for (&se, &m) in errors.iter().zip(&means) {
+            if se > 0.0 {
+                sum += (f64::from(se) / m.max(floor).max(f64::MIN_POSITIVE)).powi(2);
+                count += 1;
+            }
+        }
+        let noise = if count > 0 {
+            (sum / count as f64).sqrt()
+        } else {
+            0.0
+        };
+        (pixels, errors, noise)
+    }
+}
+
+/// Renders the reference image of the uniform stack `layers` in `model` with `renderer`'s
+/// scene, environment and lights (`renderer` must render into a float target). `progress(frame,
+/// frames)` follows the frames; `None` when `stop` was set.
+pub fn render(
+    renderer: &mut Renderer<'_>,
+    model: Model,
+    layers: &[LayerParams],
+    (width, height): (u32, u32),
+    convergence: Convergence,
+    progress: &mut dyn FnMut(u32, u32),
+    stop: &AtomicBool,
+) -> Result<Option<ReferenceImage>> {
+    convergence.check()?;
+    if model == Model::Ggx {
+        return Err(Error::Unsupported(
+            "model=ggx has no reference; the reference integrates the transfer-matrix model's \
+             lobes"
+                .into(),
+        ));
+    }
+    let table = lobe_table(model, layers)?;
+    let pass = renderer.prepare_reference(model, layers, table)?;
+    let frames = convergence.spp.div_ceil(SAMPLES_PER_FRAME);
+    let mut accumulator = Accumulator::new((width * height) as usize);
+    for f in 0..frames {
+        if stop.load(Ordering::Relaxed) {
+            return Ok(None);
+        }
+        renderer.frame_index = f;
+        let frame = renderer.render(&pass, layers, width, height)?;
+        if frame
+            .pixels
+            .iter()
+            .any(|p| p[..3].iter().any(|c| !c.is_finite()))
+        {
+            return Err(Error::Unsupported(format!(
+                "frame {f} of the reference has a non-finite pixel"
+            )));
+        }
+        accumulator.add(&frame.pixels);
+        progress(f + 1, frames);
+        if let Some(target) = convergence.noise {
+            if f >= 3 && accumulator.estimate().2 <= target {
+                break;
+            }
+        }
+    }
+    let (pixels, std_error, noise) = accumulator.estimate();
+    Ok(Some(ReferenceImage {
+        width,
+        height,
+        pixels,
+        std_error,
+        spp: accumulator.frames * SAMPLES_PER_FRAME,
+        noise,
+    }))
+}
