@@ -389,6 +389,54 @@ fn a_reference_study_compares_each_material_with_the_reference() {
     }
 }
 
+/// `reference_spp`: every run's image against the reference image of its material and scene,
+/// in results.json and .csv, an error map per run, the Pareto charts and the report's table.
+#[test]
+fn a_sweep_measures_each_run_against_the_reference_image() {
+    let dir = common::scratch_dir("sweep-image-error");
+    std::fs::write(
+        dir.join("err.toml"),
+        "name = \"err\"\nmaterials = [\"gold\"]\nbase = \"model=tm2\"\nsize = \"48x32\"\n\
+         frames = 1\nwarmup = 0\nreference_spp = 64\n\
+         [[axis]]\nname = \"fp16\"\nvalues = [\"off\", \"on\"]\n",
+    )
+    .unwrap();
+    let out = lamina(&["--validation", "sweep", "err.toml", "--out", "res"], &dir);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let results: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("res/results.json")).unwrap())
+            .unwrap();
+    let runs = results["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 3, "the ggx baseline and two variants");
+    for (i, run) in runs.iter().enumerate() {
+        let e = &run["image_error"];
+        let flip = e["flip"].as_f64().unwrap();
+        assert!((0.0..1.0).contains(&flip), "run {i}: FLIP {flip}");
+        assert!(e["rmse"].as_f64().unwrap() >= 0.0);
+        assert!(run["reference_noise"].as_f64().unwrap() > 0.0);
+        assert!(dir.join(format!("res/error-maps/run-{i}.png")).is_file());
+    }
+    let csv = std::fs::read_to_string(dir.join("res/results.csv")).unwrap();
+    assert!(csv
+        .lines()
+        .next()
+        .unwrap()
+        .ends_with(",flip,rmse,max_relative_error"));
+    assert!(dir.join("res/chart-pareto-time.png").is_file());
+    let report = std::fs::read_to_string(dir.join("res/REPORT.md")).unwrap();
+    for expected in [
+        "| run | material | FLIP | RMSE | max rel. error | median ms | Pareto | error map |",
+        "| ggx baseline | gold |",
+        "](error-maps/run-0.png)",
+        "chart-pareto-time.png",
+    ] {
+        assert!(
+            report.contains(expected),
+            "`{expected}` missing from {report}"
+        );
+    }
+}
+
 #[test]
 fn every_committed_sweep_file_expands() {
     let dir = common::repo_path("profiling/sweeps");

@@ -131,9 +131,11 @@ pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
     }
     let mut written = Vec::new();
     for (study, timed) in list.iter().zip(timed) {
+        let mut timed = timed;
+        let error_maps = std::mem::take(&mut timed.error_maps);
         let (results, meta) = sweep::finish(study, timed, setup.is_some());
         let dir = dir_of(study);
-        let charts = sweep::write(&dir, study, &results, &meta)?;
+        let charts = sweep::write(&dir, study, &results, &meta, &error_maps)?;
         println!("\n== {} ({})", study.title, study.name);
         print!("{}", results.table());
         println!(

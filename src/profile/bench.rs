@@ -134,6 +134,13 @@ pub struct Run {
     /// written before coverage.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub active_layers: Option<ActiveLayers>,
+    /// The run's image against the reference image of its material and scene (a sweep's
+    /// `reference_spp`, `profile::image_error`); absent where not measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub image_error: Option<super::image_error::ImageError>,
+    /// That reference's relative noise (`render::reference::ReferenceImage::noise`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_noise: Option<f64>,
 }
 
 /// The spread of a run's active layer count over its shaded pixels.
@@ -361,6 +368,8 @@ pub fn run(
                         ActiveLayers::of(&case.stack, config.scene, config.width, config.height)
                     })
                     .flatten(),
+                image_error: None,
+                reference_noise: None,
             })
             .collect(),
     })
@@ -397,11 +406,11 @@ impl Results {
             "variant,material,frames,min_ms,median_ms,mean_ms,max_ms,stdev_ms,ratio_to_baseline,\
              fragment_invocations,pipeline_ms,spirv_bytes,instructions,instructions_total,\
              instructions_large,instructions_total_large,instructions_per_pixel,\
-             instructions_per_pixel_ratio\n",
+             instructions_per_pixel_ratio,flip,rmse,max_relative_error\n",
         );
         for r in &self.runs {
             out += &format!(
-                "\"{}\",\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                "\"{}\",\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 r.variant,
                 r.material.replace('"', "\"\""),
                 r.frames,
@@ -419,7 +428,10 @@ impl Results {
                 opt(r.instructions_large),
                 opt(r.instructions_total_large),
                 opt_f(r.instructions_per_pixel),
-                opt_f(r.instructions_per_pixel_ratio)
+                opt_f(r.instructions_per_pixel_ratio),
+                opt_f(r.image_error.map(|e| e.flip)),
+                opt_f(r.image_error.map(|e| e.rmse)),
+                opt_f(r.image_error.map(|e| e.max_relative))
             );
         }
         out

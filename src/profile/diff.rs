@@ -336,6 +336,8 @@ mod tests {
             instructions_per_pixel_ratio: None,
             executable_stats: None,
             active_layers: None,
+            image_error: None,
+            reference_noise: None,
         }
     }
 

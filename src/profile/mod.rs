@@ -6,6 +6,7 @@ pub mod callgrind;
 pub mod chart;
 pub mod counter;
 pub mod diff;
+pub mod image_error;
 pub mod prebuild;
 pub mod report;
 pub mod stats;

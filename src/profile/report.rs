@@ -494,6 +494,9 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
     if m.fit {
         fit_section(md, s);
     }
+    if r.runs.iter().any(|run| run.image_error.is_some()) {
+        image_error_section(md, s, out_dir);
+    }
     let reading = reading(s);
     if !reading.is_empty() {
         let _ = writeln!(md, "Reading:\n");
@@ -836,6 +839,95 @@ fn bake_error_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
         .collect();
     let _ = writeln!(md, "| **worst** | {} |\n", worst.join(" | "));
     for chart in ["chart-bake-lobes", "chart-bake-image"] {
+        let png = s.dir.join(format!("{chart}.png"));
+        if png.is_file() {
+            let _ = writeln!(
+                md,
+                "![{} — {chart}]({})\n",
+                m.title,
+                relative(&png, out_dir)
+            );
+        }
+    }
+}
+
+/// Each run's image against the reference image of its material and scene, its cost beside
+/// it, whether it is on its material's Pareto front, its error map; the Pareto charts.
+fn image_error_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
+    let (r, m) = (&s.results, &s.meta);
+    let counted = r
+        .runs
+        .iter()
+        .any(|run| run.instructions_per_pixel.is_some());
+    let noise = r
+        .runs
+        .iter()
+        .filter_map(|run| run.reference_noise)
+        .fold(0.0f64, f64::max);
+    let _ = writeln!(
+        md,
+        "Image error against the reference image of the same material and scene (`lamina \
+         render --reference`: the exact model's lobes integrated by Monte Carlo, no split sum, \
+         no prefiltering, no FGD table; relative noise at most {noise:.1e}): mean FLIP, RMSE and \
+         the largest relative error of the radiance (`profile::image_error`). A run is on the \
+         Pareto front when no run of its material is both cheaper ({}) and closer.\n",
+        if counted {
+            "JIT instructions per pixel"
+        } else {
+            "median time"
+        }
+    );
+    let _ = writeln!(
+        md,
+        "| run | material | FLIP | RMSE | max rel. error | {} | Pareto | error map |",
+        if counted {
+            "JIT instr. per pixel"
+        } else {
+            "median ms"
+        }
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
+    let mut dominated = Vec::new();
+    for (i, run) in r.runs.iter().enumerate() {
+        let Some(e) = run.image_error else {
+            continue;
+        };
+        let name = match m.points.iter().find(|p| p.run == i) {
+            Some(p) if !p.coords.is_empty() => p.coords.join(", "),
+            _ if run.variant.starts_with("model=ggx") => "ggx baseline".to_string(),
+            _ => run.variant.clone(),
+        };
+        let cost = if counted {
+            fmt_per_pixel(run.instructions_per_pixel)
+        } else {
+            format!("{:.3}", run.median_ms)
+        };
+        let front = super::sweep::pareto_front(r, &run.material, counted).contains(&i);
+        if !front {
+            dominated.push(format!("{name} ({})", run.material));
+        }
+        let map = s.dir.join(super::sweep::error_map_path(i));
+        let _ = writeln!(
+            md,
+            "| {name} | {} | {:.4} | {:.2e} | {:.1} % | {cost} | {} | [map]({}) |",
+            run.material,
+            e.flip,
+            e.rmse,
+            100.0 * e.max_relative,
+            if front { "yes" } else { "dominated" },
+            relative(&map, out_dir)
+        );
+    }
+    md.push('\n');
+    if !dominated.is_empty() {
+        let _ = writeln!(
+            md,
+            "Dominated (another run of the material is cheaper and closer to the reference): \
+             {}.\n",
+            dominated.join("; ")
+        );
+    }
+    for chart in ["chart-pareto-instructions", "chart-pareto-time"] {
         let png = s.dir.join(format!("{chart}.png"));
         if png.is_file() {
             let _ = writeln!(
@@ -1486,6 +1578,8 @@ mod tests {
             instructions_per_pixel_ratio: None,
             executable_stats: None,
             active_layers: None,
+            image_error: None,
+            reference_noise: None,
         }
     }
 

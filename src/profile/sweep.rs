@@ -16,6 +16,8 @@
 //! counter_sizes = ["48x48", "96x96"]  # the two counted resolutions (per pixel: the difference)
 //! fit = "linear"                      # optional: report a least-squares line along axis 1
 //! tile_width = 128                    # optional: a suite's sizes apply if their width is a multiple
+//! reference_spp = 64                  # optional: each run's image against the reference image
+//!                                     #   (`render::reference`, this many samples per lobe)
 //! [reference]                         # optional, alone: each material's model against the
 //! cosines = [1.0, 0.7, 0.4, 0.15]     #   stochastic reference (`reference::compare`), no
 //! paths = 200000                      #   timing; paths per channel and view cosine
@@ -40,6 +42,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use super::image_error::ErrorMap;
 use crate::error::{Error, Result};
 use crate::imageio::write_file_atomically;
 use crate::material::Stack;
@@ -96,6 +99,9 @@ pub struct SweepFile {
     pub targets: Vec<Target>,
     pub bake_error: Option<BakeErrorSpec>,
     pub reference: Option<ReferenceSpec>,
+    /// Each run's image error against the reference image of its material and scene
+    /// (`profile::image_error`), the reference at this many samples per lobe and pixel.
+    pub reference_spp: Option<u32>,
 }
 
 /// `[reference]`: the study compares each material's model with the stochastic reference
@@ -216,6 +222,8 @@ pub struct Study {
     pub bake_error: Option<(Vec<u32>, u32)>,
     /// A `[reference]` study (then `points` is empty: nothing is timed).
     pub reference: Option<ReferenceStudy>,
+    /// `reference_spp`: image errors against reference images of this many samples per lobe.
+    pub image_error_spp: Option<u32>,
 }
 
 impl Study {
@@ -280,6 +288,7 @@ pub fn load(file: &Path) -> Result<(Vec<Study>, bool)> {
                 warmup: sweep.warmup,
                 counter: sweep.counter.clone(),
                 counter_sizes: sweep.counter_sizes.clone(),
+                reference_spp: sweep.reference_spp,
             };
             let dir = file.parent().unwrap_or(Path::new("."));
             let mut studies = Vec::new();
@@ -314,6 +323,7 @@ struct Overrides {
     warmup: Option<u32>,
     counter: Option<String>,
     counter_sizes: Option<Vec<String>>,
+    reference_spp: Option<u32>,
 }
 
 fn bad(file: &Path, field: &str, message: &str) -> Error {
@@ -670,6 +680,19 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
         .map(|spec| check_reference(file, sweep, spec, &mut points))
         .transpose()?;
     let counter = if reference.is_some() { None } else { counter };
+    let image_error_spp = match over.reference_spp.or(sweep.reference_spp) {
+        Some(spp) if spp == 0 || spp > crate::render::reference::MAX_SPP => {
+            return Err(bad(
+                file,
+                "reference_spp",
+                &format!(
+                    "{spp}: allowed: 1 to {} samples per lobe and pixel",
+                    crate::render::reference::MAX_SPP
+                ),
+            ))
+        }
+        spp => spp.filter(|_| reference.is_none()),
+    };
     if points.is_empty() && reference.is_none() {
         return Err(bad(
             file,
@@ -722,6 +745,7 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
         targets,
         bake_error,
         reference,
+        image_error_spp,
     })
 }
 
@@ -966,6 +990,9 @@ pub struct Timed {
     pub cases: Vec<Case>,
     pub bake_error: Vec<MaterialBakeError>,
     pub reference: Vec<MaterialReference>,
+    /// `reference_spp`: each run's FLIP error map, by run index (the image errors themselves
+    /// are in the results' runs).
+    pub error_maps: Vec<(usize, ErrorMap)>,
 }
 
 /// The first part of [`run`]: the timings, interleaved on `gpu`, and the bake-error study.
@@ -998,11 +1025,17 @@ pub fn time(
         Some(spec) => reference_comparisons(spec, progress)?,
         None => Vec::new(),
     };
+    let mut results = results;
+    let error_maps = match study.image_error_spp {
+        Some(spp) => image_errors(gpu, equirect, study, &cases, spp, &mut results, progress)?,
+        None => Vec::new(),
+    };
     Ok(Timed {
         results,
         cases,
         bake_error,
         reference,
+        error_maps,
     })
 }
 
@@ -1058,6 +1091,7 @@ pub fn finish(study: &Study, timed: Timed, counted: bool) -> (super::bench::Resu
         cases,
         bake_error,
         reference,
+        error_maps: _,
     } = timed;
     let baselines = cases.len() - study.points.len();
     let counted = study.counter.filter(|_| counted);
@@ -1086,6 +1120,73 @@ pub fn finish(study: &Study, timed: Timed, counted: bool) -> (super::bench::Resu
         reference,
     };
     (results, meta)
+}
+
+/// `reference_spp`: renders each uniform material's reference image (the study's scene, size
+/// and lighting) and each run's image, in float targets, and records the run's image error
+/// (`profile::image_error`) in `results`; returns the error maps by run. Runs of a stack that
+/// varies over the surface get none (the reference renders uniform stacks).
+fn image_errors(
+    gpu: &crate::gpu::Gpu,
+    equirect: &crate::imageio::HdrImage,
+    study: &Study,
+    cases: &[Case],
+    spp: u32,
+    results: &mut super::bench::Results,
+    progress: &mut impl FnMut(&str, usize, usize),
+) -> Result<Vec<(usize, ErrorMap)>> {
+    use crate::render::reference::{self, Convergence, ReferenceImage};
+    use crate::render::{Renderer, TargetFormat};
+    let (width, height) = (study.width, study.height);
+    let mut renderer = Renderer::with_target(
+        gpu,
+        equirect,
+        crate::tables::environment::EnvDesc::default(),
+        TargetFormat::Float,
+    )?;
+    renderer.lighting = study.lighting.clone();
+    super::bench::place_scene(&mut renderer, study.scene, width, height)?;
+    let never = std::sync::atomic::AtomicBool::new(false);
+    let mut references: Vec<(String, ReferenceImage)> = Vec::new();
+    let mut maps = Vec::new();
+    for (i, case) in cases.iter().enumerate() {
+        progress("image error", i, cases.len());
+        if case.stack.surface.is_some() {
+            continue;
+        }
+        let layers = case.stack.params();
+        renderer.set_surface(None)?;
+        if !references.iter().any(|(name, _)| *name == case.stack.name) {
+            let image = reference::render(
+                &mut renderer,
+                case.stack.model,
+                &layers,
+                (width, height),
+                Convergence { spp, noise: None },
+                &mut |_, _| {},
+                &never,
+            )?
+            .expect("an image-error reference is never stopped");
+            references.push((case.stack.name.clone(), image));
+        }
+        let (_, image) = references
+            .iter()
+            .find(|(name, _)| *name == case.stack.name)
+            .expect("rendered above");
+        let pass = renderer.prepare(case.variant, &layers)?;
+        let frame = renderer.render(&pass, &layers, width, height)?;
+        let (error, map) = super::image_error::compare(&frame.pixels, &image.pixels, width, height);
+        results.runs[i].image_error = Some(error);
+        results.runs[i].reference_noise = Some(image.noise);
+        maps.push((i, map));
+    }
+    progress("image error", cases.len(), cases.len());
+    Ok(maps)
+}
+
+/// Where a run's error map goes in its study's directory.
+pub fn error_map_path(run: usize) -> String {
+    format!("error-maps/run-{run}.png")
 }
 
 /// A `[reference]` study: each material's model against the stochastic reference, on every
@@ -1170,6 +1271,7 @@ pub fn write(
     study: &Study,
     results: &super::bench::Results,
     meta: &StudyMeta,
+    error_maps: &[(usize, ErrorMap)],
 ) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).map_err(|e| Error::Output {
         path: dir.to_owned(),
@@ -1192,7 +1294,146 @@ pub fn write(
         reference_chart(e).write(&path)?;
         charts.push(path.with_extension("png"));
     }
+    for (run, map) in error_maps {
+        let path = dir.join(error_map_path(*run));
+        crate::imageio::write_png(&path, map.width as usize, map.height as usize, &map.rgba())?;
+    }
+    for (stem, chart) in pareto_charts(results, meta) {
+        let path = dir.join(stem);
+        chart.write(&path)?;
+        charts.push(path.with_extension("png"));
+    }
     Ok(charts)
+}
+
+/// A run's cost for the Pareto charts: JIT instructions per shaded pixel where counted at two
+/// sizes, else the median time.
+fn run_cost(run: &super::bench::Run, instructions: bool) -> Option<f64> {
+    if instructions {
+        run.instructions_per_pixel
+    } else {
+        Some(run.median_ms)
+    }
+}
+
+/// The runs of `material` on its Pareto front of (FLIP, cost): no other run of the material
+/// is at most as costly and at most as wrong, and better in one.
+pub fn pareto_front(
+    results: &super::bench::Results,
+    material: &str,
+    instructions: bool,
+) -> Vec<usize> {
+    let points: Vec<(usize, f64, f64)> = results
+        .runs
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.material == material)
+        .filter_map(|(i, r)| Some((i, r.image_error?.flip, run_cost(r, instructions)?)))
+        .collect();
+    points
+        .iter()
+        .filter(|&&(_, e, c)| {
+            !points
+                .iter()
+                .any(|&(_, e2, c2)| e2 <= e && c2 <= c && (e2 < e || c2 < c))
+        })
+        .map(|&(i, _, _)| i)
+        .collect()
+}
+
+/// Cost against image error, per material: every run a point (FLIP, cost), the Pareto front
+/// joined. One chart by JIT instructions per pixel where counted, one by time.
+fn pareto_charts(
+    results: &super::bench::Results,
+    meta: &StudyMeta,
+) -> Vec<(&'static str, super::chart::XyChart)> {
+    use super::chart::{XyChart, XySeries};
+    if !results.runs.iter().any(|r| r.image_error.is_some()) {
+        return Vec::new();
+    }
+    let label = |i: usize| {
+        let run = &results.runs[i];
+        match meta.points.iter().find(|p| p.run == i) {
+            Some(p) if !p.coords.is_empty() => {
+                format!("{} ({})", p.coords.join(", "), run.material)
+            }
+            _ if run.variant.starts_with("model=ggx") => format!("ggx baseline ({})", run.material),
+            _ => format!("{} ({})", run.variant, run.material),
+        }
+    };
+    let mut materials: Vec<&str> = Vec::new();
+    for r in &results.runs {
+        if r.image_error.is_some() && !materials.contains(&r.material.as_str()) {
+            materials.push(&r.material);
+        }
+    }
+    let counted = results
+        .runs
+        .iter()
+        .any(|r| r.instructions_per_pixel.is_some());
+    let kinds: &[(&'static str, bool, &str)] = if counted {
+        &[
+            (
+                "chart-pareto-instructions",
+                true,
+                "JIT instructions per shaded pixel",
+            ),
+            ("chart-pareto-time", false, "median time (ms)"),
+        ]
+    } else {
+        &[("chart-pareto-time", false, "median time (ms)")]
+    };
+    kinds
+        .iter()
+        .map(|&(stem, instructions, y_label)| {
+            let mut series = Vec::new();
+            let mut colour = 0;
+            let mut max_flip = 0.0f64;
+            for material in &materials {
+                for (i, r) in results.runs.iter().enumerate() {
+                    let (Some(e), Some(cost)) = (r.image_error, run_cost(r, instructions)) else {
+                        continue;
+                    };
+                    if r.material != *material {
+                        continue;
+                    }
+                    max_flip = max_flip.max(e.flip);
+                    series.push(XySeries {
+                        label: label(i),
+                        points: vec![(e.flip, cost, 0.0, 0.0)],
+                        line: false,
+                        colour,
+                    });
+                    colour += 1;
+                }
+                let mut front: Vec<(f64, f64)> = pareto_front(results, material, instructions)
+                    .into_iter()
+                    .filter_map(|i| {
+                        let r = &results.runs[i];
+                        Some((r.image_error?.flip, run_cost(r, instructions)?))
+                    })
+                    .collect();
+                front.sort_by(|a, b| a.0.total_cmp(&b.0));
+                series.push(XySeries {
+                    label: format!("Pareto front ({material})"),
+                    points: front.iter().map(|&(x, y)| (x, y, 0.0, 0.0)).collect(),
+                    line: true,
+                    colour,
+                });
+                colour += 1;
+            }
+            (
+                stem,
+                XyChart {
+                    title: format!("{} — cost against image error", meta.title),
+                    x_label: "mean FLIP against the reference image".into(),
+                    y_label: y_label.into(),
+                    x_range: (0.0, (max_flip * 1.15).max(1e-3)),
+                    series,
+                },
+            )
+        })
+        .collect()
 }
 
 /// The file stem of a material's chart in a `[reference]` study: `reference-` and the name's

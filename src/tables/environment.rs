@@ -363,7 +363,7 @@ pub fn cube_direction(face: u32, u: f64, v: f64) -> DVec3 {
 
 /// Columns and rows of the grid [`sampling_tables`] tabulates (fewer for a smaller image: one
 /// cell per texel).
-pub const SAMPLING_GRID: (u32, u32) = (256, 128);
+pub const SAMPLING_GRID: (u32, u32) = (1024, 512);
 
 /// The environment's importance sampling, as `bindings/scene.glsl`'s `EnvironmentSampling`
 /// reads it: a header (the grid's columns and rows, 0, 0) then, over [`SAMPLING_GRID`]'s

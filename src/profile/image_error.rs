@@ -1,0 +1,126 @@
+//! How far a variant's image is from the reference image of the same material and scene
+//! (`render::reference`): RMSE and the largest relative error of the linear radiance, and
+//! FLIP (Andersson et al. 2020, NVIDIA's perceptual difference; the `nv-flip` bindings wgpu's
+//! tests use) between the two images tone-mapped as `lamina render` writes its PNGs, at FLIP's
+//! default 67 pixels per degree. The FLIP error map (magma) is what a reader looks at.
+
+use serde::{Deserialize, Serialize};
+
+use crate::imageio::tonemap;
+
+/// A variant's image against the reference.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+pub struct ImageError {
+    /// Mean FLIP over the pixels (0: identical to the eye, 1: as different as can be).
+    pub flip: f64,
+    /// Root mean square of the linear radiance's difference, over pixels and RGB.
+    pub rmse: f64,
+    /// The largest |test − reference| / reference over the pixels (mean of RGB), references
+    /// below 1 % of the image's mean radiance counting as that.
+    pub max_relative: f64,
+}
+
+/// An error map: RGB8 rows top to bottom.
+pub struct ErrorMap {
+    pub width: u32,
+    pub height: u32,
+    pub rgb: Vec<u8>,
+}
+
+impl ErrorMap {
+    /// As RGBA8, for `imageio::write_png`.
+    pub fn rgba(&self) -> Vec<u8> {
+        self.rgb
+            .chunks(3)
+            .flat_map(|p| [p[0], p[1], p[2], 255])
+            .collect()
+    }
+}
+
+/// `test` against `reference` (linear RGBA, rows top to bottom, `width` × `height`).
+pub fn compare(
+    test: &[[f32; 4]],
+    reference: &[[f32; 4]],
+    width: u32,
+    height: u32,
+) -> (ImageError, ErrorMap) {
+    assert_eq!(test.len(), reference.len(), "images of one size");
+    assert_eq!(test.len(), (width * height) as usize, "pixel count");
+    let mean = |p: &[f32; 4]| (f64::from(p[0]) + f64::from(p[1]) + f64::from(p[2])) / 3.0;
+    let image_mean = reference.iter().map(mean).sum::<f64>() / reference.len().max(1) as f64;
+    let floor = (0.01 * image_mean).max(f64::MIN_POSITIVE);
+    let (mut sq, mut max_relative) = (0.0, 0.0f64);
+    for (t, r) in test.iter().zip(reference) {
+        for c in 0..3 {
+            sq += (f64::from(t[c]) - f64::from(r[c])).powi(2);
+        }
+        max_relative = max_relative.max((mean(t) - mean(r)).abs() / mean(r).max(floor));
+    }
+    let rmse = (sq / (3 * test.len().max(1)) as f64).sqrt();
+    let rgb8 = |pixels: &[[f32; 4]]| {
+        let rgba = tonemap(pixels, 0.0);
+        let rgb: Vec<u8> = rgba.chunks(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+        nv_flip::FlipImageRgb8::with_data(width, height, &rgb)
+    };
+    let map = nv_flip::flip(
+        rgb8(reference),
+        rgb8(test),
+        nv_flip::DEFAULT_PIXELS_PER_DEGREE,
+    );
+    let flip = f64::from(nv_flip::FlipPool::from_image(&map).mean());
+    let colours = map.apply_color_lut(&nv_flip::magma_lut());
+    (
+        ImageError {
+            flip,
+            rmse,
+            max_relative,
+        },
+        ErrorMap {
+            width,
+            height,
+            rgb: colours.to_vec(),
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_image_against_itself_has_no_error_and_a_change_has_some() {
+        let (w, h) = (32, 24);
+        let reference: Vec<[f32; 4]> = (0..w * h)
+            .map(|i| {
+                let v = (i % w) as f32 / w as f32;
+                [v, 0.5 * v, 0.2, 1.0]
+            })
+            .collect();
+        let (same, _) = compare(&reference, &reference, w, h);
+        assert_eq!(same.rmse, 0.0);
+        assert_eq!(same.max_relative, 0.0);
+        assert!(same.flip < 1e-6, "{}", same.flip);
+        // A brighter band over a quarter of the rows.
+        let mut test = reference.clone();
+        for p in &mut test[..(w * h / 4) as usize] {
+            p[0] *= 1.5;
+            p[1] *= 1.5;
+        }
+        let (changed, map) = compare(&test, &reference, w, h);
+        assert!(
+            changed.rmse > 0.01 && changed.max_relative > 0.2,
+            "{changed:?}"
+        );
+        assert!(
+            changed.flip > 0.01 && changed.flip < 1.0,
+            "{}",
+            changed.flip
+        );
+        assert_eq!(map.rgb.len(), (w * h * 3) as usize);
+        // A bigger change is a bigger error.
+        for p in &mut test[..(w * h / 4) as usize] {
+            p[0] *= 2.0;
+        }
+        assert!(compare(&test, &reference, w, h).0.flip > changed.flip);
+    }
+}
