@@ -416,12 +416,24 @@ fn a_sweep_measures_each_run_against_the_reference_image() {
         assert!(run["reference_noise"].as_f64().unwrap() > 0.0);
         assert!(dir.join(format!("res/error-maps/run-{i}.png")).is_file());
     }
+    // fp16 against its fp32 twin: only for the fp16 run.
+    let halves: Vec<usize> = (0..runs.len())
+        .filter(|&i| runs[i].get("image_error_vs_fp32").is_some())
+        .collect();
+    assert_eq!(halves.len(), 1, "{runs:?}");
+    let half = &runs[halves[0]];
+    assert!(half["variant"].as_str().unwrap().contains("fp16=on"));
+    let flip = half["image_error_vs_fp32"]["flip"].as_f64().unwrap();
+    assert!((0.0..1.0).contains(&flip), "{flip}");
+    assert!(dir
+        .join(format!("res/error-maps/run-{}-vs-fp32.png", halves[0]))
+        .is_file());
     let csv = std::fs::read_to_string(dir.join("res/results.csv")).unwrap();
     assert!(csv
         .lines()
         .next()
         .unwrap()
-        .ends_with(",flip,rmse,max_relative_error"));
+        .ends_with(",flip,rmse,max_relative_error,flip_vs_fp32"));
     assert!(dir.join("res/chart-pareto-time.png").is_file());
     let report = std::fs::read_to_string(dir.join("res/REPORT.md")).unwrap();
     for expected in [
@@ -429,6 +441,7 @@ fn a_sweep_measures_each_run_against_the_reference_image() {
         "| ggx baseline | gold |",
         "](error-maps/run-0.png)",
         "chart-pareto-time.png",
+        "| FLIP vs fp32 |",
     ] {
         assert!(
             report.contains(expected),

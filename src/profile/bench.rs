@@ -141,6 +141,10 @@ pub struct Run {
     /// That reference's relative noise (`render::reference::ReferenceImage::noise`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reference_noise: Option<f64>,
+    /// A half-precision run's image against that of the same variant in single precision:
+    /// what fp16 alone changes (its banding, as a number).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub image_error_vs_fp32: Option<super::image_error::ImageError>,
 }
 
 /// The spread of a run's active layer count over its shaded pixels.
@@ -370,6 +374,7 @@ pub fn run(
                     .flatten(),
                 image_error: None,
                 reference_noise: None,
+                image_error_vs_fp32: None,
             })
             .collect(),
     })
@@ -406,11 +411,11 @@ impl Results {
             "variant,material,frames,min_ms,median_ms,mean_ms,max_ms,stdev_ms,ratio_to_baseline,\
              fragment_invocations,pipeline_ms,spirv_bytes,instructions,instructions_total,\
              instructions_large,instructions_total_large,instructions_per_pixel,\
-             instructions_per_pixel_ratio,flip,rmse,max_relative_error\n",
+             instructions_per_pixel_ratio,flip,rmse,max_relative_error,flip_vs_fp32\n",
         );
         for r in &self.runs {
             out += &format!(
-                "\"{}\",\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                "\"{}\",\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 r.variant,
                 r.material.replace('"', "\"\""),
                 r.frames,
@@ -431,7 +436,8 @@ impl Results {
                 opt_f(r.instructions_per_pixel_ratio),
                 opt_f(r.image_error.map(|e| e.flip)),
                 opt_f(r.image_error.map(|e| e.rmse)),
-                opt_f(r.image_error.map(|e| e.max_relative))
+                opt_f(r.image_error.map(|e| e.max_relative)),
+                opt_f(r.image_error_vs_fp32.map(|e| e.flip))
             );
         }
         out

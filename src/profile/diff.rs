@@ -338,6 +338,7 @@ mod tests {
             active_layers: None,
             image_error: None,
             reference_noise: None,
+            image_error_vs_fp32: None,
         }
     }
 

@@ -927,6 +927,37 @@ fn image_error_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
             dominated.join("; ")
         );
     }
+    let halves: Vec<(usize, &Run)> = r
+        .runs
+        .iter()
+        .enumerate()
+        .filter(|(_, run)| run.image_error_vs_fp32.is_some())
+        .collect();
+    if !halves.is_empty() {
+        let _ = writeln!(
+            md,
+            "Half precision against the same variant in single precision (what fp16 alone \
+             changes):\n\n| variant | material | FLIP vs fp32 | RMSE vs fp32 | FLIP vs reference | \
+             error map vs fp32 |\n|---|---|---|---|---|---|"
+        );
+        for (i, run) in halves {
+            let (e, against) = (
+                run.image_error_vs_fp32.expect("filtered"),
+                run.image_error.map_or(f64::NAN, |e| e.flip),
+            );
+            let map = s.dir.join(super::sweep::fp32_error_map_path(i));
+            let _ = writeln!(
+                md,
+                "| {} | {} | {:.4} | {:.2e} | {against:.4} | [map]({}) |",
+                run.variant,
+                run.material,
+                e.flip,
+                e.rmse,
+                relative(&map, out_dir)
+            );
+        }
+        md.push('\n');
+    }
     for chart in ["chart-pareto-instructions", "chart-pareto-time"] {
         let png = s.dir.join(format!("{chart}.png"));
         if png.is_file() {
@@ -1580,6 +1611,7 @@ mod tests {
             active_layers: None,
             image_error: None,
             reference_noise: None,
+            image_error_vs_fp32: None,
         }
     }
 

@@ -1149,6 +1149,7 @@ fn image_errors(
     let never = std::sync::atomic::AtomicBool::new(false);
     let mut references: Vec<(String, ReferenceImage)> = Vec::new();
     let mut maps = Vec::new();
+    let mut frames: Vec<Option<Vec<[f32; 4]>>> = vec![None; cases.len()];
     for (i, case) in cases.iter().enumerate() {
         progress("image error", i, cases.len());
         if case.stack.surface.is_some() {
@@ -1179,14 +1180,48 @@ fn image_errors(
         results.runs[i].image_error = Some(error);
         results.runs[i].reference_noise = Some(image.noise);
         maps.push((i, map));
+        frames[i] = Some(frame.pixels);
+    }
+    // Half precision against its own single-precision twin: what fp16 alone changes.
+    for (i, case) in cases.iter().enumerate() {
+        let twin = VariantKey {
+            fp16: false,
+            ..case.variant
+        };
+        let Some(j) = cases
+            .iter()
+            .position(|c| c.variant == twin && c.stack.name == case.stack.name)
+            .filter(|_| case.variant.fp16)
+        else {
+            continue;
+        };
+        if let (Some(test), Some(fp32)) = (&frames[i], &frames[j]) {
+            let (error, map) = super::image_error::compare(test, fp32, width, height);
+            results.runs[i].image_error_vs_fp32 = Some(error);
+            maps.push((i + FP32_MAPS, map));
+        }
     }
     progress("image error", cases.len(), cases.len());
     Ok(maps)
 }
 
-/// Where a run's error map goes in its study's directory.
+/// Offset of the run index under which a half-precision run's error map against its fp32
+/// twin travels with the others ([`error_map_path`]).
+const FP32_MAPS: usize = 1 << 20;
+
+/// Where a run's error map goes in its study's directory: against the reference, or (for a
+/// half-precision run's map against its fp32 twin, index offset by [`FP32_MAPS`]) against it.
 pub fn error_map_path(run: usize) -> String {
-    format!("error-maps/run-{run}.png")
+    if run >= FP32_MAPS {
+        format!("error-maps/run-{}-vs-fp32.png", run - FP32_MAPS)
+    } else {
+        format!("error-maps/run-{run}.png")
+    }
+}
+
+/// [`error_map_path`] of run `run`'s map against its fp32 twin.
+pub fn fp32_error_map_path(run: usize) -> String {
+    error_map_path(run + FP32_MAPS)
 }
 
 /// A `[reference]` study: each material's model against the stochastic reference, on every
