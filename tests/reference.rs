@@ -213,3 +213,30 @@ fn the_reference_image_of_a_white_furnace_is_the_model_reflectance() {
     }
     common::assert_validation_clean(&gpu);
 }
+
+#[test]
+fn a_reference_render_refuses_bad_arguments_by_name() {
+    let dir = common::scratch_dir("reference-render-bad");
+    for (args, expected) in [
+        (vec!["--spp", "0"], "--spp 0"),
+        (vec!["--spp", "9999999"], "1 to 1048576 samples"),
+        (vec!["--noise", "2"], "--noise 2"),
+        (vec!["--variant", "fp16=on"], "leave out --variant"),
+        (
+            vec!["--material", "patchy-patina"],
+            "varies over the surface",
+        ),
+    ] {
+        let mut full = vec!["render", "--reference", "--size", "16x16"];
+        full.extend_from_slice(&args);
+        full.extend_from_slice(&["--out", "r.exr", "--png", "r.png"]);
+        let out = lamina(&full, &dir);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(
+            err.contains(expected),
+            "{args:?}: `{expected}` missing from {err}"
+        );
+        assert!(!dir.join("r.exr").exists() && !dir.join("r.png").exists());
+    }
+}

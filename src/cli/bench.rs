@@ -8,6 +8,8 @@ use lamina::imageio;
 use lamina::material::Stack;
 use lamina::profile::bench::{self, BenchConfig, Case};
 use lamina::profile::counter::{self, CounterSetup, CounterSizes};
+use lamina::profile::image_error;
+use lamina::render::reference;
 use lamina::render::scene::Scene;
 use lamina::Size;
 
@@ -39,6 +41,15 @@ pub struct BenchArgs {
     warmup: u32,
     #[command(flatten)]
     env: EnvArg,
+    /// Also measure each variant's image against the reference image of the material and
+    /// scene (`lamina render --reference`, this many samples per lobe): mean FLIP, RMSE and the
+    /// largest relative error in the table, JSON and CSV.
+    #[arg(long, value_name = "N")]
+    reference_spp: Option<u32>,
+    /// With --reference-spp: write each run's FLIP error map under this directory
+    /// (error-maps/run-N.png, N the run's row in the JSON).
+    #[arg(long, value_name = "DIR", requires = "reference_spp")]
+    error_maps: Option<PathBuf>,
     /// Write the results as JSON.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
@@ -82,11 +93,39 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
         warmup: args.warmup,
         lighting: args.env.lights.lighting()?,
     };
+    if let Some(spp) = args.reference_spp {
+        reference::Convergence { spp, noise: None }.check()?;
+    }
     let bar = progress_bar("frames");
     print_pipelines(&mut gpu, Some(&bar));
     let mut results = bench::run(&gpu, &equirect, &config, follow(&bar))?;
     bar.finish_and_clear();
     check_validation(&gpu)?;
+    if let Some(spp) = args.reference_spp {
+        let bar = progress_bar("image error");
+        let maps = image_error::measure(
+            &gpu,
+            &equirect,
+            &config,
+            &config.with_baselines(),
+            spp,
+            &mut results,
+            &mut |what, done, total| {
+                bar.set_message(what.to_owned());
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            },
+        )?;
+        bar.finish_and_clear();
+        check_validation(&gpu)?;
+        if let Some(dir) = &args.error_maps {
+            for (run, map) in &maps {
+                let path = dir.join(image_error::error_map_path(*run));
+                imageio::write_png(&path, map.width as usize, map.height as usize, &map.rgba())?;
+            }
+            println!("wrote {} error map(s) under {}", maps.len(), dir.display());
+        }
+    }
     if args.counter == Some(CounterArg::Instructions) {
         let setup = CounterSetup::for_device(&gpu, &env_path)?;
         let bar = progress_bar("counted (callgrind)");
@@ -103,6 +142,18 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
         bar.finish_and_clear();
     }
     print!("{}", results.table());
+    for run in &results.runs {
+        if let Some(e) = run.image_error {
+            println!(
+                "image error: FLIP {:.4}, RMSE {:.2e}, max relative {:.1} %  {} | {}",
+                e.flip,
+                e.rmse,
+                100.0 * e.max_relative,
+                run.variant,
+                run.material
+            );
+        }
+    }
     if let Some(path) = &args.json {
         imageio::write_file_atomically(path, serde_json::to_string_pretty(&results)?)?;
         println!("wrote {}", path.display());

@@ -83,6 +83,111 @@ pub fn compare(
     )
 }
 
+/// Renders each uniform material's reference image (`config`'s scene, size and lighting, `spp`
+/// samples per lobe) and one frame of each of `cases` (the runs of `results`, in order), in
+/// float targets, and records each run's image error and, for a half-precision run, its error
+/// against its single-precision twin, in `results`. Returns the error maps by run
+/// ([`error_map_path`]). Runs of a stack that varies over the surface get none (the reference
+/// renders uniform stacks).
+pub fn measure(
+    gpu: &crate::gpu::Gpu,
+    equirect: &crate::imageio::HdrImage,
+    config: &super::bench::BenchConfig,
+    cases: &[super::bench::Case],
+    spp: u32,
+    results: &mut super::bench::Results,
+    progress: &mut impl FnMut(&str, usize, usize),
+) -> crate::error::Result<Vec<(usize, ErrorMap)>> {
+    use crate::render::reference::{self, Convergence, ReferenceImage};
+    use crate::render::{Renderer, TargetFormat};
+    use crate::variant::VariantKey;
+    let (width, height) = (config.width, config.height);
+    let mut renderer = Renderer::with_target(
+        gpu,
+        equirect,
+        crate::tables::environment::EnvDesc::default(),
+        TargetFormat::Float,
+    )?;
+    renderer.lighting = config.lighting.clone();
+    super::bench::place_scene(&mut renderer, config.scene, width, height)?;
+    let never = std::sync::atomic::AtomicBool::new(false);
+    let mut references: Vec<(String, ReferenceImage)> = Vec::new();
+    let mut maps = Vec::new();
+    let mut frames: Vec<Option<Vec<[f32; 4]>>> = vec![None; cases.len()];
+    for (i, case) in cases.iter().enumerate() {
+        progress("image error", i, cases.len());
+        if case.stack.surface.is_some() {
+            continue;
+        }
+        let layers = case.stack.params();
+        renderer.set_surface(None)?;
+        if !references.iter().any(|(name, _)| *name == case.stack.name) {
+            let image = reference::render(
+                &mut renderer,
+                case.stack.model,
+                &layers,
+                (width, height),
+                Convergence { spp, noise: None },
+                &mut |_, _| {},
+                &never,
+            )?
+            .expect("an image-error reference is never stopped");
+            references.push((case.stack.name.clone(), image));
+        }
+        let (_, image) = references
+            .iter()
+            .find(|(name, _)| *name == case.stack.name)
+            .expect("rendered above");
+        let pass = renderer.prepare(case.variant, &layers)?;
+        let frame = renderer.render(&pass, &layers, width, height)?;
+        let (error, map) = compare(&frame.pixels, &image.pixels, width, height);
+        results.runs[i].image_error = Some(error);
+        results.runs[i].reference_noise = Some(image.noise);
+        maps.push((i, map));
+        frames[i] = Some(frame.pixels);
+    }
+    // Half precision against its own single-precision twin: what fp16 alone changes.
+    for (i, case) in cases.iter().enumerate() {
+        let twin = VariantKey {
+            fp16: false,
+            ..case.variant
+        };
+        let Some(j) = cases
+            .iter()
+            .position(|c| c.variant == twin && c.stack.name == case.stack.name)
+            .filter(|_| case.variant.fp16)
+        else {
+            continue;
+        };
+        if let (Some(test), Some(fp32)) = (&frames[i], &frames[j]) {
+            let (error, map) = compare(test, fp32, width, height);
+            results.runs[i].image_error_vs_fp32 = Some(error);
+            maps.push((i + FP32_MAPS, map));
+        }
+    }
+    progress("image error", cases.len(), cases.len());
+    Ok(maps)
+}
+
+/// Offset of the run index under which a half-precision run's error map against its fp32
+/// twin travels with the others ([`error_map_path`]).
+const FP32_MAPS: usize = 1 << 20;
+
+/// Where a run's error map goes in its study's directory: against the reference, or (for a
+/// half-precision run's map against its fp32 twin, index offset by [`FP32_MAPS`]) against it.
+pub fn error_map_path(run: usize) -> String {
+    if run >= FP32_MAPS {
+        format!("error-maps/run-{}-vs-fp32.png", run - FP32_MAPS)
+    } else {
+        format!("error-maps/run-{run}.png")
+    }
+}
+
+/// [`error_map_path`] of run `run`'s map against its fp32 twin.
+pub fn fp32_error_map_path(run: usize) -> String {
+    error_map_path(run + FP32_MAPS)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -906,7 +906,7 @@ fn image_error_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
         if !front {
             dominated.push(format!("{name} ({})", run.material));
         }
-        let map = s.dir.join(super::sweep::error_map_path(i));
+        let map = s.dir.join(super::image_error::error_map_path(i));
         let _ = writeln!(
             md,
             "| {name} | {} | {:.4} | {:.2e} | {:.1} % | {cost} | {} | [map]({}) |",
@@ -945,7 +945,7 @@ fn image_error_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
                 run.image_error_vs_fp32.expect("filtered"),
                 run.image_error.map_or(f64::NAN, |e| e.flip),
             );
-            let map = s.dir.join(super::sweep::fp32_error_map_path(i));
+            let map = s.dir.join(super::image_error::fp32_error_map_path(i));
             let _ = writeln!(
                 md,
                 "| {} | {} | {:.4} | {:.2e} | {against:.4} | [map]({}) |",

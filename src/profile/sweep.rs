@@ -1027,7 +1027,15 @@ pub fn time(
     };
     let mut results = results;
     let error_maps = match study.image_error_spp {
-        Some(spp) => image_errors(gpu, equirect, study, &cases, spp, &mut results, progress)?,
+        Some(spp) => super::image_error::measure(
+            gpu,
+            equirect,
+            &config,
+            &cases,
+            spp,
+            &mut results,
+            progress,
+        )?,
         None => Vec::new(),
     };
     Ok(Timed {
@@ -1120,108 +1128,6 @@ pub fn finish(study: &Study, timed: Timed, counted: bool) -> (super::bench::Resu
         reference,
     };
     (results, meta)
-}
-
-/// `reference_spp`: renders each uniform material's reference image (the study's scene, size
-/// and lighting) and each run's image, in float targets, and records the run's image error
-/// (`profile::image_error`) in `results`; returns the error maps by run. Runs of a stack that
-/// varies over the surface get none (the reference renders uniform stacks).
-fn image_errors(
-    gpu: &crate::gpu::Gpu,
-    equirect: &crate::imageio::HdrImage,
-    study: &Study,
-    cases: &[Case],
-    spp: u32,
-    results: &mut super::bench::Results,
-    progress: &mut impl FnMut(&str, usize, usize),
-) -> Result<Vec<(usize, ErrorMap)>> {
-    use crate::render::reference::{self, Convergence, ReferenceImage};
-    use crate::render::{Renderer, TargetFormat};
-    let (width, height) = (study.width, study.height);
-    let mut renderer = Renderer::with_target(
-        gpu,
-        equirect,
-        crate::tables::environment::EnvDesc::default(),
-        TargetFormat::Float,
-    )?;
-    renderer.lighting = study.lighting.clone();
-    super::bench::place_scene(&mut renderer, study.scene, width, height)?;
-    let never = std::sync::atomic::AtomicBool::new(false);
-    let mut references: Vec<(String, ReferenceImage)> = Vec::new();
-    let mut maps = Vec::new();
-    let mut frames: Vec<Option<Vec<[f32; 4]>>> = vec![None; cases.len()];
-    for (i, case) in cases.iter().enumerate() {
-        progress("image error", i, cases.len());
-        if case.stack.surface.is_some() {
-            continue;
-        }
-        let layers = case.stack.params();
-        renderer.set_surface(None)?;
-        if !references.iter().any(|(name, _)| *name == case.stack.name) {
-            let image = reference::render(
-                &mut renderer,
-                case.stack.model,
-                &layers,
-                (width, height),
-                Convergence { spp, noise: None },
-                &mut |_, _| {},
-                &never,
-            )?
-            .expect("an image-error reference is never stopped");
-            references.push((case.stack.name.clone(), image));
-        }
-        let (_, image) = references
-            .iter()
-            .find(|(name, _)| *name == case.stack.name)
-            .expect("rendered above");
-        let pass = renderer.prepare(case.variant, &layers)?;
-        let frame = renderer.render(&pass, &layers, width, height)?;
-        let (error, map) = super::image_error::compare(&frame.pixels, &image.pixels, width, height);
-        results.runs[i].image_error = Some(error);
-        results.runs[i].reference_noise = Some(image.noise);
-        maps.push((i, map));
-        frames[i] = Some(frame.pixels);
-    }
-    // Half precision against its own single-precision twin: what fp16 alone changes.
-    for (i, case) in cases.iter().enumerate() {
-        let twin = VariantKey {
-            fp16: false,
-            ..case.variant
-        };
-        let Some(j) = cases
-            .iter()
-            .position(|c| c.variant == twin && c.stack.name == case.stack.name)
-            .filter(|_| case.variant.fp16)
-        else {
-            continue;
-        };
-        if let (Some(test), Some(fp32)) = (&frames[i], &frames[j]) {
-            let (error, map) = super::image_error::compare(test, fp32, width, height);
-            results.runs[i].image_error_vs_fp32 = Some(error);
-            maps.push((i + FP32_MAPS, map));
-        }
-    }
-    progress("image error", cases.len(), cases.len());
-    Ok(maps)
-}
-
-/// Offset of the run index under which a half-precision run's error map against its fp32
-/// twin travels with the others ([`error_map_path`]).
-const FP32_MAPS: usize = 1 << 20;
-
-/// Where a run's error map goes in its study's directory: against the reference, or (for a
-/// half-precision run's map against its fp32 twin, index offset by [`FP32_MAPS`]) against it.
-pub fn error_map_path(run: usize) -> String {
-    if run >= FP32_MAPS {
-        format!("error-maps/run-{}-vs-fp32.png", run - FP32_MAPS)
-    } else {
-        format!("error-maps/run-{run}.png")
-    }
-}
-
-/// [`error_map_path`] of run `run`'s map against its fp32 twin.
-pub fn fp32_error_map_path(run: usize) -> String {
-    error_map_path(run + FP32_MAPS)
 }
 
 /// A `[reference]` study: each material's model against the stochastic reference, on every
@@ -1330,7 +1236,7 @@ pub fn write(
         charts.push(path.with_extension("png"));
     }
     for (run, map) in error_maps {
-        let path = dir.join(error_map_path(*run));
+        let path = dir.join(super::image_error::error_map_path(*run));
         crate::imageio::write_png(&path, map.width as usize, map.height as usize, &map.rgba())?;
     }
     for (stem, chart) in pareto_charts(results, meta) {
