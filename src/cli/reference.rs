@@ -154,6 +154,19 @@ fn table(name: &str, samples: &[Reference]) -> String {
             rgb(&s.reflectance),
             rgb(&s.transmittance)
         ));
+        // The slice at every fifth bin (10°), mean of RGB: the lobe's shape at a glance.
+        let slice: Vec<String> = (0..reference::SLICE_BINS)
+            .step_by(5)
+            .map(|i| {
+                let (a, b) = reference::slice_bin_edges(i);
+                let f = s.slice[i].mean.iter().sum::<f64>() / 3.0;
+                format!("{:+.0}° {f:.3}", (0.5 * (a + b)).to_degrees())
+            })
+            .collect();
+        out.push_str(&format!(
+            "  BRDF in the plane of incidence (1/sr, mean RGB; + mirror side): {}\n",
+            slice.join(", ")
+        ));
         if s.unresolved.iter().any(|&u| u > 0.0) {
             out.push_str(&format!(
                 "  unresolved (paths past {} events) {:.2e} {:.2e} {:.2e}\n",
