@@ -582,11 +582,10 @@ fn bench_counts_instructions_per_shaded_pixel() {
         "per pixel {per_pixel_ratio} <= whole draw {whole_draw_ratio}"
     );
     let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
-    assert!(csv
-        .lines()
-        .next()
-        .unwrap()
-        .ends_with("instructions_per_pixel,instructions_per_pixel_ratio"));
+    assert!(csv.lines().next().unwrap().ends_with(
+        "instructions_per_pixel,instructions_per_pixel_ratio,flip,rmse,max_relative_error,\
+             flip_vs_fp32"
+    ));
 }
 
 #[test]
