@@ -156,18 +156,7 @@ pub fn write_exr_rgba16f(
     height: usize,
     pixels: &[[f32; 4]],
 ) -> Result<(), ImageIoError> {
-    assert_eq!(
-        pixels.len(),
-        width * height,
-        "pixel count must match the size"
-    );
-    write_atomically(path, |temp| {
-        exr::prelude::write_rgba_file(temp, width, height, |x, y| {
-            let p = pixels[y * width + x].map(f16::from_f32);
-            (p[0], p[1], p[2], p[3])
-        })
-        .map_err(|e| e.to_string())
-    })
+    write_exr(path, width, height, pixels, f16::from_f32)
 }
 
 /// Writes RGBA pixels (rows top to bottom) as a 32-bit float OpenEXR file (a reference image,
@@ -178,6 +167,17 @@ pub fn write_exr_rgba32f(
     height: usize,
     pixels: &[[f32; 4]],
 ) -> Result<(), ImageIoError> {
+    write_exr(path, width, height, pixels, |c| c)
+}
+
+/// Writes RGBA pixels as an OpenEXR file of the sample type `sample` converts to.
+fn write_exr<T: exr::prelude::IntoSample>(
+    path: &Path,
+    width: usize,
+    height: usize,
+    pixels: &[[f32; 4]],
+    sample: impl Fn(f32) -> T + Sync,
+) -> Result<(), ImageIoError> {
     assert_eq!(
         pixels.len(),
         width * height,
@@ -185,7 +185,7 @@ pub fn write_exr_rgba32f(
     );
     write_atomically(path, |temp| {
         exr::prelude::write_rgba_file(temp, width, height, |x, y| {
-            let p = pixels[y * width + x];
+            let p = pixels[y * width + x].map(&sample);
             (p[0], p[1], p[2], p[3])
         })
         .map_err(|e| e.to_string())

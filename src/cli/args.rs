@@ -106,6 +106,33 @@ pub enum CounterArg {
 }
 
 /// `--exposure EV`: a number of stops in [`imageio::EXPOSURE_RANGE_EV`].
+/// `--cos`: the view cosines a command evaluates at.
+#[derive(clap::Args)]
+pub struct CosinesArg {
+    /// View cosines, comma-separated, each in (0, 1].
+    #[arg(
+        long = "cos",
+        value_name = "LIST",
+        value_delimiter = ',',
+        required = true
+    )]
+    cosines: Vec<f64>,
+}
+
+impl CosinesArg {
+    /// The cosines, each checked to be in (0, 1].
+    pub fn checked(&self) -> anyhow::Result<&[f64]> {
+        if let Some(c) = self
+            .cosines
+            .iter()
+            .find(|c| !(c.is_finite() && **c > 0.0 && **c <= 1.0))
+        {
+            anyhow::bail!("--cos: {c} is not a view cosine; each must be in (0, 1]");
+        }
+        Ok(&self.cosines)
+    }
+}
+
 pub fn exposure(text: &str) -> Result<f32, String> {
     let ev = text
         .parse::<f32>()

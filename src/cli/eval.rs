@@ -7,6 +7,7 @@ use lamina::oracle;
 use lamina::output::{EvalReport, EvalSample};
 use lamina::render::eval::GpuEvaluator;
 
+use super::args::CosinesArg;
 use super::{check_validation, GlobalArgs};
 
 /// Where the model is evaluated.
@@ -27,14 +28,8 @@ pub struct EvalArgs {
     /// Material file or preset name (see assets/materials/).
     #[arg(long, value_name = "FILE|PRESET")]
     material: String,
-    /// View cosines, comma-separated, each in (0, 1].
-    #[arg(
-        long = "cos",
-        value_name = "LIST",
-        value_delimiter = ',',
-        required = true
-    )]
-    cosines: Vec<f64>,
+    #[command(flatten)]
+    cos: CosinesArg,
     #[arg(long, value_enum, default_value_t = Backend::Gpu)]
     backend: Backend,
     /// Shader variant; axes not given come from the defaults and the material's model.
@@ -48,26 +43,19 @@ pub struct EvalArgs {
 pub fn run(global: &GlobalArgs, args: &EvalArgs) -> Result<()> {
     let (stack, variant) = resolve_with_variant(&args.material, args.variant.as_deref())?;
     stack.require_uniform("`lamina eval`")?;
-    if let Some(c) = args
-        .cosines
-        .iter()
-        .find(|c| !(c.is_finite() && **c > 0.0 && **c <= 1.0))
-    {
-        anyhow::bail!("--cos: {c} is not a view cosine; each must be in (0, 1]");
-    }
+    let cosines = args.cos.checked()?;
     let layers = stack.params();
     let (backend, results) = match args.backend {
         Backend::Cpu => {
             oracle::check_cpu_variant(variant)?;
             let gpu = global.open_gpu()?;
-            let results =
-                oracle::VariantOracle::new(&gpu, variant)?.evaluate(&layers, &args.cosines)?;
+            let results = oracle::VariantOracle::new(&gpu, variant)?.evaluate(&layers, cosines)?;
             check_validation(&gpu)?;
             ("cpu", results)
         }
         Backend::Exact => (
             "exact",
-            args.cosines
+            cosines
                 .iter()
                 .map(|&c| oracle::evaluate(variant, &layers, c))
                 .collect::<Vec<_>>(),
@@ -75,7 +63,7 @@ pub fn run(global: &GlobalArgs, args: &EvalArgs) -> Result<()> {
         Backend::Gpu => {
             let gpu = global.open_gpu()?;
             let evaluator = GpuEvaluator::new(&gpu, variant)?;
-            let results = evaluator.evaluate(&layers, &args.cosines)?;
+            let results = evaluator.evaluate(&layers, cosines)?;
             check_validation(&gpu)?;
             ("gpu", results)
         }
@@ -84,8 +72,7 @@ pub fn run(global: &GlobalArgs, args: &EvalArgs) -> Result<()> {
         material: stack.name.clone(),
         model: variant.model.to_string(),
         backend: backend.into(),
-        samples: args
-            .cosines
+        samples: cosines
             .iter()
             .zip(&results)
             .map(|(&c, e)| EvalSample::new(c, e))

@@ -3,7 +3,6 @@
 //! progress bar; Ctrl-C stops it without writing anything.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -13,6 +12,7 @@ use lamina::reference::{self, Reference, Settings};
 use lamina::variant::{Axis, Model, G2};
 use serde::Serialize;
 
+use super::args::CosinesArg;
 use super::stop_on_interrupt;
 
 #[derive(clap::Args)]
@@ -20,14 +20,8 @@ pub struct ReferenceArgs {
     /// Material file or preset name (see assets/materials/).
     #[arg(long, value_name = "FILE|PRESET")]
     material: String,
-    /// View cosines, comma-separated, each in (0, 1].
-    #[arg(
-        long = "cos",
-        value_name = "LIST",
-        value_delimiter = ',',
-        required = true
-    )]
-    cosines: Vec<f64>,
+    #[command(flatten)]
+    cos: CosinesArg,
     /// Light paths per channel and view cosine (standard errors fall as 1/√N).
     #[arg(long, value_name = "N", default_value_t = 1_000_000)]
     paths: u64,
@@ -64,13 +58,7 @@ struct ReferenceReport<'a> {
 pub fn run(args: &ReferenceArgs) -> Result<()> {
     let stack = Stack::resolve(&args.material)?;
     stack.require_uniform("`lamina reference`")?;
-    if let Some(c) = args
-        .cosines
-        .iter()
-        .find(|c| !(c.is_finite() && **c > 0.0 && **c <= 1.0))
-    {
-        anyhow::bail!("--cos: {c} is not a view cosine; each must be in (0, 1]");
-    }
+    let cosines = args.cos.checked()?;
     let g2 = G2::parse_value(&args.g2).context("--g2")?;
     let settings = Settings {
         paths: args.paths,
@@ -80,7 +68,7 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
     };
     settings.check()?;
     let layers = stack.params();
-    let bar = ProgressBar::new(args.paths * args.cosines.len() as u64);
+    let bar = ProgressBar::new(args.paths * cosines.len() as u64);
     bar.set_style(
         ProgressStyle::with_template(
             "{prefix:>12} [{bar:30}] {human_pos}/{human_len} paths per channel ({elapsed}, ETA {eta})",
@@ -90,10 +78,9 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
     );
     bar.set_prefix("reference");
     let stop = stop_on_interrupt();
-    let done = AtomicU64::new(0);
-    let mut samples = Vec::with_capacity(args.cosines.len());
-    for &mu in &args.cosines {
-        let before = done.load(Ordering::Relaxed);
+    let mut samples = Vec::with_capacity(cosines.len());
+    for (j, &mu) in cosines.iter().enumerate() {
+        let before = j as u64 * args.paths;
         let mut progress = |paths: u64| bar.set_position(before + paths);
         let result = reference::simulate(&layers, &settings, mu, &mut progress, stop)?;
         let Some(result) = result else {
@@ -104,7 +91,6 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
                 bar.length().unwrap_or(0)
             );
         };
-        done.store(before + args.paths, Ordering::Relaxed);
         samples.push(result);
     }
     bar.finish_and_clear();

@@ -37,28 +37,7 @@ pub const HEIGHT: u32 = 540;
 impl Chart {
     /// Writes `STEM.png` and `STEM.svg` atomically.
     pub fn write(&self, stem: &Path) -> Result<()> {
-        let svg_path = stem.with_extension("svg");
-        let mut svg = String::new();
-        {
-            let backend = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT));
-            self.draw(backend.into_drawing_area())
-                .map_err(|e| chart_error(&svg_path, e))?;
-        }
-        crate::imageio::write_file_atomically(&svg_path, &svg)?;
-
-        let png_path = stem.with_extension("png");
-        let mut canvas = Canvas::new(WIDTH, HEIGHT);
-        {
-            let area = (&mut canvas).into_drawing_area();
-            self.draw(area).map_err(|e| chart_error(&png_path, e))?;
-        }
-        let rgba: Vec<u8> = canvas
-            .rgb
-            .chunks(3)
-            .flat_map(|p| [p[0], p[1], p[2], 255])
-            .collect();
-        crate::imageio::write_png(&png_path, WIDTH as usize, HEIGHT as usize, &rgba)?;
-        Ok(())
+        write_plot(self, stem)
     }
 
     /// Whether the values span enough decades to need a log-scaled y axis.
@@ -204,27 +183,7 @@ pub struct XyChart {
 impl XyChart {
     /// Writes `STEM.png` and `STEM.svg` atomically.
     pub fn write(&self, stem: &Path) -> Result<()> {
-        let svg_path = stem.with_extension("svg");
-        let mut svg = String::new();
-        {
-            let backend = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT));
-            self.draw(backend.into_drawing_area())
-                .map_err(|e| chart_error(&svg_path, e))?;
-        }
-        crate::imageio::write_file_atomically(&svg_path, &svg)?;
-        let png_path = stem.with_extension("png");
-        let mut canvas = Canvas::new(WIDTH, HEIGHT);
-        {
-            let area = (&mut canvas).into_drawing_area();
-            self.draw(area).map_err(|e| chart_error(&png_path, e))?;
-        }
-        let rgba: Vec<u8> = canvas
-            .rgb
-            .chunks(3)
-            .flat_map(|p| [p[0], p[1], p[2], 255])
-            .collect();
-        crate::imageio::write_png(&png_path, WIDTH as usize, HEIGHT as usize, &rgba)?;
-        Ok(())
+        write_plot(self, stem)
     }
 
     fn values(&self) -> impl Iterator<Item = f64> + '_ {
@@ -319,6 +278,58 @@ impl XyChart {
             .draw()?;
         Ok(())
     }
+}
+
+/// What [`write_plot`] draws twice: into SVG and into the PNG canvas.
+trait Plot {
+    fn draw_on<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, plotters::coord::Shift>,
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>>;
+}
+
+impl Plot for Chart {
+    fn draw_on<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, plotters::coord::Shift>,
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        self.draw(root)
+    }
+}
+
+impl Plot for XyChart {
+    fn draw_on<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, plotters::coord::Shift>,
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        self.draw(root)
+    }
+}
+
+/// Writes `STEM.svg` (text stays text) and `STEM.png` (the bundled font's canvas) of `plot`,
+/// each atomically.
+fn write_plot(plot: &impl Plot, stem: &Path) -> Result<()> {
+    let svg_path = stem.with_extension("svg");
+    let mut svg = String::new();
+    {
+        let backend = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT));
+        plot.draw_on(backend.into_drawing_area())
+            .map_err(|e| chart_error(&svg_path, e))?;
+    }
+    crate::imageio::write_file_atomically(&svg_path, &svg)?;
+    let png_path = stem.with_extension("png");
+    let mut canvas = Canvas::new(WIDTH, HEIGHT);
+    {
+        let area = (&mut canvas).into_drawing_area();
+        plot.draw_on(area).map_err(|e| chart_error(&png_path, e))?;
+    }
+    let rgba: Vec<u8> = canvas
+        .rgb
+        .chunks(3)
+        .flat_map(|p| [p[0], p[1], p[2], 255])
+        .collect();
+    crate::imageio::write_png(&png_path, WIDTH as usize, HEIGHT as usize, &rgba)?;
+    Ok(())
 }
 
 /// Axis numbers: plain where short, engineering form for counts.

@@ -471,17 +471,7 @@ fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
     md.push('\n');
     executable_stats_table(md, &header_axes, &rows);
     pivot_section(md, s);
-    for chart in ["chart-time", "chart-instructions"] {
-        let png = s.dir.join(format!("{chart}.png"));
-        if png.is_file() {
-            let _ = writeln!(
-                md,
-                "![{} — {chart}]({})\n",
-                m.title,
-                relative(&png, out_dir)
-            );
-        }
-    }
+    embed_charts(md, s, out_dir, &["chart-time", "chart-instructions"]);
     if !m.published.is_empty() {
         published_section(md, s);
     }
@@ -838,17 +828,7 @@ fn bake_error_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
         })
         .collect();
     let _ = writeln!(md, "| **worst** | {} |\n", worst.join(" | "));
-    for chart in ["chart-bake-lobes", "chart-bake-image"] {
-        let png = s.dir.join(format!("{chart}.png"));
-        if png.is_file() {
-            let _ = writeln!(
-                md,
-                "![{} — {chart}]({})\n",
-                m.title,
-                relative(&png, out_dir)
-            );
-        }
-    }
+    embed_charts(md, s, out_dir, &["chart-bake-lobes", "chart-bake-image"]);
 }
 
 /// Each run's image against the reference image of its material and scene, its cost beside
@@ -958,13 +938,23 @@ fn image_error_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
         }
         md.push('\n');
     }
-    for chart in ["chart-pareto-instructions", "chart-pareto-time"] {
+    embed_charts(
+        md,
+        s,
+        out_dir,
+        &["chart-pareto-instructions", "chart-pareto-time"],
+    );
+}
+
+/// The study's charts `names` (PNG stems) that exist, as images linked from the report.
+fn embed_charts(md: &mut String, s: &StudyDir, out_dir: &Path, names: &[&str]) {
+    for chart in names {
         let png = s.dir.join(format!("{chart}.png"));
         if png.is_file() {
             let _ = writeln!(
                 md,
                 "![{} — {chart}]({})\n",
-                m.title,
+                s.meta.title,
                 relative(&png, out_dir)
             );
         }

@@ -8,29 +8,9 @@ use std::sync::atomic::AtomicBool;
 
 use super::*;
 use crate::model::fgd::ExactFgd;
+use crate::model::tm2::tests::{coat, gold};
 use crate::model::{diffuse, fresnel, Fgd};
 use crate::variant::VariantKey;
-
-fn coat(ior: f64, roughness: f64) -> LayerParams {
-    LayerParams {
-        ior: [ior; 3],
-        kappa: [0.0; 3],
-        roughness,
-        depth: 0.0,
-        sigma_s: [0.0; 3],
-        sigma_a: [0.0; 3],
-        g: 0.0,
-        diffuse: None,
-    }
-}
-
-fn gold(roughness: f64) -> LayerParams {
-    LayerParams {
-        ior: [0.143245, 0.377423, 1.43919],
-        kappa: [3.98479, 2.3847, 1.60434],
-        ..coat(1.0, roughness)
-    }
-}
 
 fn run(layers: &[LayerParams], media: bool, g2: G2, mu: f64, paths: u64) -> Reference {
     let settings = Settings {
