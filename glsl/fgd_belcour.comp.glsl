@@ -44,12 +44,11 @@ void main() {
 
     vec4 sum = vec4(0.0);
     for (uint i = 0u; i < push.sample_count; ++i) {
-        vec3 h = sample_ggx_vndf(v, hammersley(i, push.sample_count), alpha);
-        vec3 l = reflect(-v, h);
-        if (l.z <= 0.0) {
+        vec3 h;
+        float w = vndf_reflection(v, hammersley(i, push.sample_count), alpha, g1_v, h);
+        if (w == 0.0) {
             continue;
         }
-        float w = masking_shadowing(mu, l.z, alpha) / g1_v;
         float c = dot(v, h);
         sum += w * vec4(1.0, basis_at(1u, c), basis_at(2u, c), basis_at(3u, c));
     }

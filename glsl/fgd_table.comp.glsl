@@ -47,10 +47,9 @@ void main() {
 
     float g1_v = masking_g1(mu, alpha);
     for (uint s = gl_LocalInvocationID.x; s < count; s += gl_WorkGroupSize.x) {
-        vec3 h = sample_ggx_vndf(v, hammersley(s, count), alpha);
-        vec3 o = reflect(-v, h);
+        vec3 h;
+        sample_weight[s] = vndf_reflection(v, hammersley(s, count), alpha, g1_v, h);
         sample_cos[s] = clamp(dot(v, h), 0.0, 1.0);
-        sample_weight[s] = o.z > 0.0 ? masking_shadowing(mu, o.z, alpha) / g1_v : 0.0;
     }
     barrier();
 

@@ -31,12 +31,11 @@ void main() {
 
     vec2 sum = vec2(0.0);
     for (uint i = 0u; i < push.sample_count; ++i) {
-        vec3 h = sample_ggx_vndf(v, hammersley(i, push.sample_count), alpha);
-        vec3 l = reflect(-v, h);
-        if (l.z <= 0.0) {
+        vec3 h;
+        float w = vndf_reflection(v, hammersley(i, push.sample_count), alpha, g1_v, h);
+        if (w == 0.0) {
             continue;
         }
-        float w = masking_shadowing(mu, l.z, alpha) / g1_v;
         float fc = schlick_weight(dot(v, h));
         sum += vec2((1.0 - fc) * w, fc * w);
     }

@@ -10,24 +10,27 @@
 //!   references, their spot checks and error studies;
 //! - [`render`] — passes (sky, shaded sphere), the scene and readback;
 //! - [`model`] — the CPU reference in f64;
-//! - [`oracle`] — the CPU reference for a variant (`eval --backend cpu` and `exact`, the furnace);
 //! - [`reference`] — the stochastic reference: light paths through the stack (`lamina reference`);
 //! - [`material`] — layer stacks, and the variant a stack is shaded with;
 //! - [`imageio`] — EXR/PNG input and atomic output;
 //! - [`size`] — `WxH` image sizes, one limit for the command line and the sweep files;
 //! - [`output`] — the JSON and tables commands print;
-//! - [`profile`] — the bench runner, statistics, result files;
+//! - [`profile`] — measuring one set of cases: the bench, image errors, instruction counts,
+//!   the results schema;
+//! - [`study`] — the documents above the measurements: sweep files, study runs, charts, the
+//!   report, diffs;
 //! - [`viewer`] — the interactive window (winit + egui).
 //!
 //! The `lamina` binary (`src/main.rs`, `src/cli/`) only parses, checks arguments and prints:
 //! every rule a command applies is here, where the sweep, the viewer and the tests use it too.
 
+pub mod cache;
+pub mod chart;
 pub mod error;
 pub mod gpu;
 pub mod imageio;
 pub mod material;
 pub mod model;
-pub mod oracle;
 pub mod output;
 pub mod pipeline_cache;
 pub mod profile;
@@ -35,6 +38,8 @@ pub mod reference;
 pub mod render;
 pub mod shader;
 pub mod size;
+pub mod stats;
+pub mod study;
 pub mod tables;
 pub mod text;
 pub mod variant;

@@ -2,7 +2,7 @@
 //! `VkPipelineCache` (`vk::PipelineCache`) skips the compile in the next run too.
 //!
 //! - **Where:** `$LAMINA_CACHE/pipelines/` (default `~/.cache/lamina/pipelines/`), beside the
-//!   tables (`tables::cache::root`). A [`Gpu`](crate::Gpu) opened with `Gpu::new` uses it;
+//!   tables (`cache::root`). A [`Gpu`](crate::Gpu) opened with `Gpu::new` uses it;
 //!   `Gpu::validated`, the tests' device, keeps its cache in memory (a test that wants a file
 //!   names a scratch directory, `Gpu::with_pipeline_cache`).
 //! - **Key:** one file per device and driver build, named after what makes a driver's data
@@ -26,9 +26,9 @@
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
+use crate::cache::{self, checksum};
 use crate::error::Result;
 use crate::imageio;
-use crate::tables::cache::{self, checksum};
 use crate::vk::{CacheData, Device, DeviceReport, PipelineCache};
 
 const MAGIC: &[u8; 8] = b"LAMPIPE1";

@@ -400,6 +400,20 @@ impl fmt::Display for VariantKey {
     }
 }
 
+/// In result files a key is its text, the spelling the command line and sweep files share.
+impl serde::Serialize for VariantKey {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_str(self)
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for VariantKey {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let text = String::deserialize(deserializer)?;
+        text.parse().map_err(serde::de::Error::custom)
+    }
+}
+
 impl FromStr for VariantKey {
     type Err = VariantError;
 
@@ -409,6 +423,29 @@ impl FromStr for VariantKey {
 }
 
 impl VariantKey {
+    /// Whether this key has every axis value `pattern` names (`model=tm6,fp16=on`), as the
+    /// key prints them.
+    pub fn matches(&self, pattern: &str) -> bool {
+        let text = self.to_string();
+        let pairs: Vec<&str> = text.split(',').collect();
+        pattern
+            .split(',')
+            .map(str::trim)
+            .filter(|p| !p.is_empty())
+            .all(|want| pairs.contains(&want))
+    }
+
+    /// The key for prose: model and max_layers, then only the axes off their defaults.
+    pub fn short(&self) -> String {
+        let defaults = Self::default().to_string();
+        let defaults: Vec<&str> = defaults.split(',').skip(2).collect();
+        self.to_string()
+            .split(',')
+            .filter(|part| !defaults.contains(part))
+            .collect::<Vec<_>>()
+            .join(",")
+    }
+
     /// Parses `s`, taking the axes it does not name from `base` (e.g. the material's model).
     pub fn parse_over(s: &str, base: Self) -> Result<Self, VariantError> {
         let mut key = base;

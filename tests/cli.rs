@@ -3,20 +3,9 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn command(args: &[&str], dir: &Path) -> Command {
-    let mut command = Command::new(env!("CARGO_BIN_EXE_lamina"));
-    command
-        .args(args)
-        .current_dir(dir)
-        .env("XDG_RUNTIME_DIR", std::env::temp_dir());
-    command
-}
-
-fn lamina(args: &[&str], dir: &Path) -> Output {
-    command(args, dir).output().expect("run lamina")
-}
+use common::{lamina, lamina_command as command};
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
@@ -471,38 +460,13 @@ fn bench_writes_consistent_json_and_csv() {
     assert!(out.status.success(), "{}", stderr(&out));
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("b/results.json")).unwrap()).unwrap();
-    for key in [
-        "device",
-        "git_rev",
-        "command",
-        "size",
-        "lp_num_threads",
-        "runs",
-    ] {
-        assert!(json.get(key).is_some(), "missing `{key}`");
-    }
-    for key in ["name", "driver", "api_version", "vendor_id"] {
-        assert!(json["device"].get(key).is_some(), "missing device `{key}`");
-    }
-    let runs = json["runs"].as_array().unwrap();
+    let runs = common::check_results(&json, 3);
     assert_eq!(runs.len(), 3, "the ggx baseline is not added twice");
-    for run in runs {
-        let ms = |k: &str| run[k].as_f64().unwrap();
-        assert!(ms("min_ms") <= ms("median_ms") && ms("median_ms") <= ms("max_ms"));
-        assert!(ms("min_ms") <= ms("mean_ms") && ms("mean_ms") <= ms("max_ms"));
-        assert_eq!(run["frames"], 3);
+    for run in &runs {
         assert!(run["fragment_invocations"].as_u64().unwrap() > 0);
-        assert!(run.get("instructions").is_some() && run.get("executable_stats").is_some());
-        if run["variant"].as_str().unwrap().starts_with("model=ggx") {
-            assert_eq!(run["ratio_to_baseline"].as_f64().unwrap(), 1.0);
-        }
     }
     let csv = std::fs::read_to_string(dir.join("b/results.csv")).unwrap();
-    let rows: Vec<&str> = csv.lines().skip(1).collect();
-    assert_eq!(rows.len(), runs.len());
-    for (row, run) in rows.iter().zip(runs) {
-        assert!(row.starts_with(&format!("\"{}\"", run["variant"].as_str().unwrap())));
-    }
+    common::check_csv(&csv, &runs);
 }
 
 /// The per-pixel count on the sphere, whose draw carries per-draw costs (16 128 triangles'
@@ -865,12 +829,14 @@ fn bad_maps_are_named_and_nothing_is_written() {
 fn output_into_a_closed_pipe_ends_quietly() {
     use std::os::unix::process::ExitStatusExt;
     let suite = common::repo_path("profiling/sweeps/reproduce.toml");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_lamina"))
-        .args(["sweep", suite.to_str().unwrap(), "--dry-run"])
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = command(
+        &["sweep", suite.to_str().unwrap(), "--dry-run"],
+        &common::repo_path("."),
+    )
+    .stdout(std::process::Stdio::piped())
+    .stderr(std::process::Stdio::piped())
+    .spawn()
+    .unwrap();
     drop(child.stdout.take());
     let out = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);

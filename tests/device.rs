@@ -73,7 +73,7 @@ fn no_allocation_outlives_its_owner() {
         let mut renderer = Renderer::new(&gpu, &common::studio(), env).unwrap();
         for key in ["model=tm2,tir=lut32", "model=tm6,fgd=belcour"] {
             let pass = renderer
-                .prepare(key.parse().unwrap(), &common::gold())
+                .prepare_uniform(key.parse().unwrap(), &common::gold())
                 .unwrap();
             renderer.render(&pass, &common::gold(), 16, 16).unwrap();
         }

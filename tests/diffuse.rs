@@ -5,30 +5,19 @@
 mod common;
 
 use lamina::model::LayerParams;
-use lamina::oracle::VariantOracle;
 use lamina::render::eval::GpuEvaluator;
 use lamina::render::furnace;
+use lamina::render::oracle::VariantOracle;
 use lamina::variant::VariantKey;
 
+use LayerParams as L;
+
 fn coat(ior: f64, roughness: f64) -> LayerParams {
-    LayerParams {
-        ior: [ior; 3],
-        kappa: [0.0; 3],
-        roughness,
-        depth: 0.0,
-        sigma_s: [0.0; 3],
-        sigma_a: [0.0; 3],
-        g: 0.0,
-        diffuse: None,
-    }
+    L::dielectric(ior, roughness)
 }
 
 fn base(rho: [f64; 3]) -> LayerParams {
-    LayerParams {
-        roughness: 1.0,
-        diffuse: Some(rho),
-        ..coat(1.0, 0.0)
-    }
+    L::diffuse_base(rho)
 }
 
 fn stacks() -> Vec<Vec<LayerParams>> {
@@ -37,13 +26,7 @@ fn stacks() -> Vec<Vec<LayerParams>> {
         vec![coat(1.5, 0.0), base([0.62, 0.16, 0.10])],
         vec![coat(1.5, 0.05), coat(1.3, 0.3), base([0.9, 0.9, 0.2])],
         vec![
-            LayerParams {
-                depth: 0.8,
-                sigma_s: [1.5, 1.0, 0.5],
-                sigma_a: [0.1, 0.2, 0.4],
-                g: 0.3,
-                ..coat(1.6, 0.2)
-            },
+            coat(1.6, 0.2).with_medium(0.8, [1.5, 1.0, 0.5], [0.1, 0.2, 0.4], 0.3),
             base([0.5, 0.6, 0.7]),
         ],
     ]

@@ -226,7 +226,7 @@ fn grids_are_cached_by_their_parameters() {
     assert!(!build(4, 32).1, "another sample count is another table");
     assert!(!build(5, 16).1, "another size is another table");
     let key = fgd::grid_cache_key(GridKind::DielectricBelow1, G2_FORM, 4, 16);
-    let path = lamina::tables::cache::path_of(&dir, &key);
+    let path = lamina::cache::path_of(&dir, &key);
     let bytes = std::fs::read(&path).unwrap();
     std::fs::write(&path, &bytes[..bytes.len() - 5]).unwrap();
     assert!(!build(4, 16).1, "a truncated file is rebuilt");

@@ -8,8 +8,8 @@ mod common;
 use std::path::Path;
 
 use lamina::material::Stack;
-use lamina::profile::bench::Case;
 use lamina::profile::counter::{count_instructions, CountRequest};
+use lamina::profile::plan::Case;
 use lamina::render::scene::Scene;
 use lamina::variant::VariantKey;
 use lamina::Size;

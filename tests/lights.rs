@@ -60,7 +60,7 @@ fn render(
     variant: VariantKey,
     layers: &[LayerParams],
 ) -> Vec<[f32; 4]> {
-    let pass = renderer.prepare(variant, layers).unwrap();
+    let pass = renderer.prepare_uniform(variant, layers).unwrap();
     renderer.render(&pass, layers, 96, 64).unwrap().pixels
 }
 

@@ -25,7 +25,9 @@ fn single_conductor_renders_exactly_like_the_ggx_baseline() {
     let mut renderer = Renderer::new(&gpu, &common::studio(), small_env()).unwrap();
     let stack = common::gold();
     let render = |renderer: &mut Renderer, key: &str| {
-        let pass = renderer.prepare(key.parse().unwrap(), &stack).unwrap();
+        let pass = renderer
+            .prepare_uniform(key.parse().unwrap(), &stack)
+            .unwrap();
         renderer.render(&pass, &stack, 128, 96).unwrap().pixels
     };
     let ggx = render(&mut renderer, "model=ggx");
@@ -52,16 +54,7 @@ fn single_conductor_renders_exactly_like_the_ggx_baseline() {
 #[test]
 fn dielectric_stacks_conserve_energy_on_the_gpu() {
     let gpu = common::gpu();
-    let coat = |ior: f64, roughness: f64| LayerParams {
-        ior: [ior; 3],
-        kappa: [0.0; 3],
-        roughness,
-        depth: 0.0,
-        sigma_s: [0.0; 3],
-        sigma_a: [0.0; 3],
-        g: 0.0,
-        diffuse: None,
-    };
+    let coat = LayerParams::dielectric;
     let stacks = [
         vec![coat(1.5, 0.1)],
         vec![coat(1.5, 0.3), coat(1.2, 0.05)],
@@ -89,16 +82,7 @@ fn dielectric_stacks_conserve_energy_on_the_gpu() {
 #[test]
 fn furnace_shows_no_energy_gain_for_lossless_stacks() {
     let gpu = common::gpu();
-    let coat = LayerParams {
-        ior: [1.5; 3],
-        kappa: [0.0; 3],
-        roughness: 0.2,
-        depth: 0.0,
-        sigma_s: [0.0; 3],
-        sigma_a: [0.0; 3],
-        g: 0.0,
-        diffuse: None,
-    };
+    let coat = LayerParams::dielectric(1.5, 0.2);
     for model in ["model=tm2", "model=tm6"] {
         let bins = furnace::gpu(&gpu, model.parse().unwrap(), &[coat], 128, 12).unwrap();
         let (min, mean, max) = furnace::summary(&bins);

@@ -28,46 +28,20 @@ fn sensible_stack(rng: &mut Rng, model: Model) -> Vec<LayerParams> {
     let mut layers: Vec<LayerParams> = (0..coats)
         .map(|_| {
             let medium = model == Model::Tm6 && rng.unit() < 0.7;
-            LayerParams {
-                ior: [rng.range(1.1, 2.2); 3],
-                kappa: [0.0; 3],
-                roughness: rng.range(0.02, 0.8),
-                depth: if medium { rng.range(0.0, 1.5) } else { 0.0 },
-                sigma_s: if medium {
-                    [
-                        rng.range(0.0, 2.0),
-                        rng.range(0.0, 2.0),
-                        rng.range(0.0, 2.0),
-                    ]
-                } else {
-                    [0.0; 3]
-                },
-                sigma_a: if medium {
-                    [
-                        rng.range(0.0, 1.0),
-                        rng.range(0.0, 1.0),
-                        rng.range(0.0, 1.0),
-                    ]
-                } else {
-                    [0.0; 3]
-                },
-                g: if medium { rng.range(-0.5, 0.9) } else { 0.0 },
-                diffuse: None,
+            // Drawn in this order: η, α, then the medium's depth, σs, σa and g.
+            let coat = LayerParams::dielectric(rng.range(1.1, 2.2), rng.range(0.02, 0.8));
+            if !medium {
+                return coat;
             }
+            let depth = rng.range(0.0, 1.5);
+            let sigma_s = [(); 3].map(|_| rng.range(0.0, 2.0));
+            let sigma_a = [(); 3].map(|_| rng.range(0.0, 1.0));
+            coat.with_medium(depth, sigma_s, sigma_a, rng.range(-0.5, 0.9))
         })
         .collect();
     if layers.is_empty() || rng.unit() < 0.8 {
         let (ior, kappa) = METALS[(rng.unit() * METALS.len() as f64) as usize];
-        layers.push(LayerParams {
-            ior,
-            kappa,
-            roughness: rng.range(0.02, 0.8),
-            depth: 0.0,
-            sigma_s: [0.0; 3],
-            sigma_a: [0.0; 3],
-            g: 0.0,
-            diffuse: None,
-        });
+        layers.push(LayerParams::conductor(ior, kappa, rng.range(0.02, 0.8)));
     }
     layers
 }
@@ -171,15 +145,8 @@ fn gpu_matches_cpu_oracle_on_random_cases() {
 #[test]
 fn six_flux_emits_its_largest_lobe_count_on_the_gpu() {
     let gpu = common::gpu();
-    let slab = |ior: f64| LayerParams {
-        ior: [ior; 3],
-        kappa: [0.0; 3],
-        roughness: 0.2,
-        depth: 0.5,
-        sigma_s: [0.8, 0.5, 0.3],
-        sigma_a: [0.05, 0.1, 0.2],
-        g: 0.3,
-        diffuse: None,
+    let slab = |ior: f64| {
+        LayerParams::dielectric(ior, 0.2).with_medium(0.5, [0.8, 0.5, 0.3], [0.05, 0.1, 0.2], 0.3)
     };
     for n in [1usize, 3] {
         let variant: VariantKey = format!("model=tm6,max_layers={n}").parse().unwrap();

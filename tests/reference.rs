@@ -3,17 +3,10 @@
 
 mod common;
 
-use std::path::Path;
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn lamina(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lamina"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run lamina")
-}
+use common::lamina;
 
 #[test]
 fn bad_arguments_are_refused_by_name() {
@@ -129,7 +122,7 @@ fn an_interrupted_reference_writes_nothing() {
 fn the_reference_image_of_a_white_furnace_is_the_model_reflectance() {
     use lamina::imageio::HdrImage;
     use lamina::model::fgd::ExactFgd;
-    use lamina::oracle::evaluate_model;
+    use lamina::model::oracle::evaluate_model;
     use lamina::reference::compare::ExactTir;
     use lamina::render::furnace::sphere_cosine;
     use lamina::render::reference::{self, Convergence, G2_FORM};
@@ -266,7 +259,7 @@ fn the_reference_lights_meet_the_real_time_light_term() {
             Renderer::with_target(&gpu, &env, EnvDesc::default(), TargetFormat::Float).unwrap();
         renderer.lighting = Lighting::load("sun-only").unwrap();
         let variant = stack.variant(Some("tir=lut32")).unwrap();
-        let pass = renderer.prepare(variant, &layers).unwrap();
+        let pass = renderer.prepare_uniform(variant, &layers).unwrap();
         let real_time = renderer.render(&pass, &layers, size, size).unwrap();
         let image = reference::render(
             &mut renderer,

@@ -24,7 +24,7 @@ fn default_render_is_finite_sphere_differs_and_sky_matches_environment() {
     let studio = common::studio();
     let mut renderer = Renderer::new(&gpu, &studio, EnvDesc::default()).unwrap();
     let pass = renderer
-        .prepare(VariantKey::default(), &common::gold())
+        .prepare_uniform(VariantKey::default(), &common::gold())
         .unwrap();
     let (w, h) = (320, 180);
     let frame = renderer.render(&pass, &common::gold(), w, h).unwrap();
@@ -90,7 +90,7 @@ fn timestamps_are_ordered_and_full_screen_invocations_match_pixels() {
     };
     let mut renderer = Renderer::new(&gpu, &common::studio(), desc).unwrap();
     let pass = renderer
-        .prepare(VariantKey::default(), &common::gold())
+        .prepare_uniform(VariantKey::default(), &common::gold())
         .unwrap();
     // lavapipe (Mesa 22.3) counts one extra 8-pixel block per row of a full-screen draw
     // (measured: 24960 invocations at 200×120, 233280 at 640×360), so the 1% bound needs a
@@ -129,7 +129,7 @@ fn scenes_shade_the_pixels_they_count_and_full_screen_shades_all() {
     };
     let mut renderer = Renderer::new(&gpu, &common::studio(), desc).unwrap();
     let pass = renderer
-        .prepare(VariantKey::default(), &common::gold())
+        .prepare_uniform(VariantKey::default(), &common::gold())
         .unwrap();
     let nothing = Mesh {
         vertices: vec![
@@ -181,7 +181,7 @@ fn fp16_variant_renders_finite_pixels() {
     };
     let mut renderer = Renderer::new(&gpu, &common::studio(), desc).unwrap();
     let pass = renderer
-        .prepare("fp16=on".parse().unwrap(), &common::gold())
+        .prepare_uniform("fp16=on".parse().unwrap(), &common::gold())
         .unwrap();
     let frame = renderer.render(&pass, &common::gold(), 96, 64).unwrap();
     assert!(frame.pixels.iter().flatten().all(|c| c.is_finite()));

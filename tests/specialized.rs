@@ -29,16 +29,12 @@ fn cosines() -> Vec<f64> {
 }
 
 fn layer(ior: f64, kappa: f64, roughness: f64, depth: f64) -> LayerParams {
-    LayerParams {
-        ior: [ior, ior * 1.01, ior * 1.02],
-        kappa: [kappa, kappa * 0.9, kappa * 0.8],
+    LayerParams::conductor(
+        [ior, ior * 1.01, ior * 1.02],
+        [kappa, kappa * 0.9, kappa * 0.8],
         roughness,
-        depth,
-        sigma_s: [0.8, 1.2, 2.0],
-        sigma_a: [0.05, 0.1, 0.3],
-        g: 0.4,
-        diffuse: None,
-    }
+    )
+    .with_medium(depth, [0.8, 1.2, 2.0], [0.05, 0.1, 0.3], 0.4)
 }
 
 /// Stacks that take every structural branch the specialization constants fold.

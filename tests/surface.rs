@@ -8,8 +8,9 @@ use std::path::Path;
 
 use lamina::material::Stack;
 use lamina::model::LayerParams;
+use lamina::render::lights::Lighting;
 use lamina::render::scene::{full_screen, Camera};
-use lamina::render::{Renderer, TargetFormat};
+use lamina::render::{PassKey, Renderer, TargetFormat};
 use lamina::tables::environment::EnvDesc;
 use lamina::variant::VariantKey;
 
@@ -51,8 +52,15 @@ fn toml(model: &str, layers: &[String]) -> String {
 /// Renders `stack` (its surface set) under `variant` over the full-screen grid.
 fn render(renderer: &mut Renderer<'_>, variant: &str, stack: &Stack) -> Vec<[f32; 4]> {
     let variant: VariantKey = variant.parse().unwrap();
+    let key = PassKey::new(
+        variant,
+        &stack.layers,
+        stack.surface.as_deref(),
+        &renderer.lighting,
+    )
+    .unwrap();
+    let pass = renderer.prepare(&key).unwrap();
     renderer.set_surface(stack.surface.as_ref()).unwrap();
-    let pass = renderer.prepare(variant, &stack.layers).unwrap();
     renderer.render(&pass, &stack.layers, W, H).unwrap().pixels
 }
 
@@ -214,20 +222,17 @@ fn a_varying_roughness_shades_as_the_cpu_twins_stack_at_each_pixel() {
 
 #[test]
 fn varying_stacks_refuse_per_material_modes() {
-    let gpu = common::gpu();
-    let mut renderer = renderer(&gpu);
     let masked = stack(&toml(
         "tm2",
         &[format!("{COAT}coverage = 0.5\n"), GOLD.into()],
     ));
-    renderer.set_surface(masked.surface.as_ref()).unwrap();
-    let err = renderer
-        .prepare(
-            "model=tm2,mode=specialized".parse().unwrap(),
-            &masked.layers,
-        )
-        .err()
-        .expect("a varying stack under mode=specialized")
-        .to_string();
+    let err = PassKey::new(
+        "model=tm2,mode=specialized".parse().unwrap(),
+        &masked.layers,
+        masked.surface.as_deref(),
+        &Lighting::default(),
+    )
+    .expect_err("a varying stack under mode=specialized")
+    .to_string();
     assert!(err.contains("mode=generic"), "{err}");
 }

@@ -2,25 +2,12 @@
 
 mod common;
 
-use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
+use common::{lamina, text};
 use lamina::profile::counter::CounterSizes;
-use lamina::profile::sweep;
 use lamina::render::scene::Scene;
-
-fn lamina(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lamina"))
-        .args(args)
-        .current_dir(dir)
-        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
-        .output()
-        .expect("run lamina")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
+use lamina::study;
 
 const SMALL: &str = r#"
 name = "small"
@@ -59,63 +46,12 @@ fn a_sweep_writes_schema_json_matching_csv_charts_and_a_report() {
     let res = dir.join("res");
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(res.join("results.json")).unwrap()).unwrap();
-    for key in [
-        "device",
-        "git_rev",
-        "command",
-        "size",
-        "lp_num_threads",
-        "runs",
-    ] {
-        assert!(json.get(key).is_some(), "missing `{key}`");
-    }
-    for key in ["name", "driver", "api_version", "vendor_id"] {
-        assert!(json["device"].get(key).is_some(), "missing device `{key}`");
-    }
     assert_eq!(json["size"], serde_json::json!([64, 64]));
-    let runs = json["runs"].as_array().unwrap();
+    let runs = common::check_results(&json, 3);
     assert_eq!(runs.len(), 3, "3 variants, the ggx one is the baseline");
-    for run in runs {
-        for key in [
-            "variant",
-            "material",
-            "frames",
-            "min_ms",
-            "median_ms",
-            "mean_ms",
-            "max_ms",
-            "stdev_ms",
-            "ratio_to_baseline",
-            "fragment_invocations",
-            "pipeline_ms",
-            "spirv_bytes",
-            "instructions",
-            "executable_stats",
-        ] {
-            assert!(run.get(key).is_some(), "run lacks `{key}`: {run}");
-        }
-        let ms = |k: &str| run[k].as_f64().unwrap();
-        assert!(ms("min_ms") <= ms("median_ms") && ms("median_ms") <= ms("max_ms"));
-        assert!(ms("min_ms") <= ms("mean_ms") && ms("mean_ms") <= ms("max_ms"));
-        assert!(ms("stdev_ms") >= 0.0);
-        assert_eq!(run["frames"], 3);
-        if run["variant"].as_str().unwrap().starts_with("model=ggx") {
-            assert_eq!(run["ratio_to_baseline"].as_f64().unwrap(), 1.0);
-        }
-    }
     assert_eq!(json["scene"], "fullscreen", "a sweep file's default scene");
     let csv = std::fs::read_to_string(res.join("results.csv")).unwrap();
-    // Variant keys hold commas: find the median's column counting from the end.
-    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
-    let from_end = header.len() - header.iter().position(|&c| c == "median_ms").unwrap();
-    let rows: Vec<&str> = csv.lines().skip(1).collect();
-    assert_eq!(rows.len(), runs.len());
-    for (row, run) in rows.iter().zip(runs) {
-        let fields: Vec<&str> = row.split(',').collect();
-        let median: f64 = fields[fields.len() - from_end].parse().unwrap();
-        assert!(row.contains(run["variant"].as_str().unwrap()));
-        assert_eq!(median, run["median_ms"].as_f64().unwrap());
-    }
+    common::check_csv(&csv, &runs);
     for chart in ["chart-time.png", "chart-time.svg"] {
         let len = std::fs::metadata(res.join(chart)).unwrap().len();
         assert!(len > 2000, "{chart}: {len} bytes");
@@ -142,7 +78,7 @@ fn load_error(name: &str, body: &str) -> String {
     let dir = common::scratch_dir(&format!("sweep-bad-{name}"));
     let file = dir.join(format!("{name}.toml"));
     std::fs::write(&file, body).unwrap();
-    match sweep::load(&file) {
+    match study::load(&file) {
         Ok(_) => panic!("{name}: accepted"),
         Err(e) => e.to_string(),
     }
@@ -176,6 +112,13 @@ fn bad_sweep_files_are_refused_before_any_gpu_work() {
         "[[axis]]\nname = \"g2\"\nvalues = [\"smith\", \"nope\"]\n",
     );
     assert!(e.contains("nope") && e.contains("height-correlated"), "{e}");
+    for (name, body) in [
+        ("nothing", ""),
+        ("nothing-named", "name = \"x\"\nsize = \"64x64\"\n"),
+    ] {
+        let e = load_error(name, body);
+        assert!(e.contains("names nothing to measure"), "{e}");
+    }
     let e = load_error("key", "colour = 1\n");
     assert!(e.contains("colour"), "{e}");
     let e = load_error("counter", "counter = \"cycles\"\n");
@@ -453,7 +396,7 @@ fn a_sweep_measures_each_run_against_the_reference_image() {
 #[test]
 fn every_committed_sweep_file_expands() {
     let dir = common::repo_path("profiling/sweeps");
-    let (studies, suite) = sweep::load(&dir.join("reproduce.toml")).unwrap();
+    let (studies, suite) = study::load(&dir.join("reproduce.toml")).unwrap();
     assert!(suite);
     assert!(studies.len() >= 8);
     let static_size = studies
@@ -498,7 +441,7 @@ fn every_committed_sweep_file_expands() {
         "specialization",
         "specialized-scaling",
     ] {
-        let (studies, _) = sweep::load(&dir.join(format!("{name}.toml"))).unwrap();
+        let (studies, _) = study::load(&dir.join(format!("{name}.toml"))).unwrap();
         assert_eq!(
             studies[0].scene,
             Scene::FullScreen,
@@ -509,9 +452,9 @@ fn every_committed_sweep_file_expands() {
         assert_eq!(study.counter, Some(CounterSizes::DEFAULT));
     }
     // The old method's study stays on the sphere; issue 11's targets and bake-error study load.
-    let (dilution, _) = sweep::load(&dir.join("dilution.toml")).unwrap();
+    let (dilution, _) = study::load(&dir.join("dilution.toml")).unwrap();
     assert_eq!(dilution[0].scene, Scene::Sphere);
-    let (specialization, _) = sweep::load(&dir.join("specialization.toml")).unwrap();
+    let (specialization, _) = study::load(&dir.join("specialization.toml")).unwrap();
     assert_eq!(specialization[0].targets.len(), 2);
     assert_eq!(specialization[0].targets[0].material, "varnished gold");
     assert_eq!(
@@ -519,9 +462,9 @@ fn every_committed_sweep_file_expands() {
         Some((vec![32, 64, 128, 256, 512], 128))
     );
     // The real-GPU suite: the same studies, at the talk's resolution, timed only.
-    let (gpu, suite) = sweep::load(&dir.join("reproduce-gpu.toml")).unwrap();
+    let (gpu, suite) = study::load(&dir.join("reproduce-gpu.toml")).unwrap();
     assert!(suite);
-    let names = |list: &[sweep::Study]| list.iter().map(|s| s.name.clone()).collect::<Vec<_>>();
+    let names = |list: &[study::Study]| list.iter().map(|s| s.name.clone()).collect::<Vec<_>>();
     assert_eq!(names(&gpu), names(&studies));
     for s in &gpu {
         // 1920 is a multiple of the divergence study's `tile_width`.

@@ -3,11 +3,11 @@
 
 mod common;
 
+use lamina::cache;
 use lamina::material::{presets, Stack};
 use lamina::model::tir::{trapped_fraction, AnalyticTir, FitTir};
 use lamina::model::tir_fit::COEFFICIENTS;
 use lamina::render::Renderer;
-use lamina::tables::cache;
 use lamina::tables::environment::EnvDesc;
 use lamina::tables::tir::{self, TirTable};
 use lamina::variant::VariantKey;
@@ -163,11 +163,11 @@ fn every_tir_and_fgd_value_renders_every_preset_finite() {
             // One pass for the stacks that end in a diffuse base, one for the others
             // (`ShadeSpec::diffuse_base`).
             let ceramic = Stack::resolve("glazed-ceramic").unwrap().params();
-            let plain = renderer.prepare(variant, &[]).unwrap();
-            let diffuse = renderer.prepare(variant, &ceramic).unwrap();
+            let plain = renderer.prepare_uniform(variant, &[]).unwrap();
+            let diffuse = renderer.prepare_uniform(variant, &ceramic).unwrap();
             for stack in &stacks {
                 let layers = stack.params();
-                let pass = if diffuse.check_material(&layers).is_ok() {
+                let pass = if diffuse.key.admits(&layers).is_ok() {
                     &diffuse
                 } else {
                     &plain

@@ -6,9 +6,10 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use lamina::imageio;
 use lamina::material::Stack;
-use lamina::profile::bench::{self, BenchConfig, Case};
+use lamina::profile::bench::{self, BenchConfig};
 use lamina::profile::counter::{self, CounterSetup, CounterSizes};
 use lamina::profile::image_error;
+use lamina::profile::plan::{Case, Plan};
 use lamina::render::reference;
 use lamina::render::scene::Scene;
 use lamina::Size;
@@ -85,7 +86,7 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
         .collect::<Result<Vec<_>>>()?;
     let mut gpu = global.open_gpu()?;
     let config = BenchConfig {
-        cases,
+        plan: Plan::new(cases),
         scene: args.scene,
         width: args.size.width,
         height: args.size.height,
@@ -103,19 +104,13 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
     check_validation(&gpu)?;
     if let Some(spp) = args.reference_spp {
         let bar = progress_bar("image error");
-        let maps = image_error::measure(
-            &gpu,
-            &equirect,
-            &config,
-            &config.with_baselines(),
-            spp,
-            &mut results,
-            &mut |what, done, total| {
+        let (errors, maps) =
+            image_error::measure(&gpu, &equirect, &config, spp, &mut |what, done, total| {
                 bar.set_message(what.to_owned());
                 bar.set_length(total as u64);
                 bar.set_position(done as u64);
-            },
-        )?;
+            })?;
+        results.record_image_errors(&errors);
         bar.finish_and_clear();
         check_validation(&gpu)?;
         if let Some(dir) = &args.error_maps {
@@ -129,16 +124,18 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
     if args.counter == Some(CounterArg::Instructions) {
         let setup = CounterSetup::for_device(&gpu, &env_path)?;
         let bar = progress_bar("counted (callgrind)");
-        counter::add_counts(
-            &mut results,
+        let (info, counts) = counter::count_plans(
+            &[&config.plan],
             &setup,
-            &config.with_baselines(),
+            config.scene,
+            &config.lighting,
             args.counter_sizes,
             |done, total| {
                 bar.set_length(total as u64);
                 bar.set_position(done as u64);
             },
         )?;
+        results.record_counts(info, &counts[0]);
         bar.finish_and_clear();
     }
     print!("{}", results.table());

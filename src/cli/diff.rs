@@ -1,10 +1,10 @@
 //! `lamina diff`: two sets of results side by side, with an optional gate on instruction
-//! growth (`lamina::profile::diff`).
+//! growth (`lamina::study::diff`).
 
 use std::path::PathBuf;
 
 use anyhow::Result;
-use lamina::profile::diff;
+use lamina::study::diff;
 
 use super::args;
 

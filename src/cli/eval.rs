@@ -3,9 +3,10 @@
 
 use anyhow::Result;
 use lamina::material::resolve_with_variant;
-use lamina::oracle;
+use lamina::model::oracle;
 use lamina::output::{EvalReport, EvalSample};
 use lamina::render::eval::GpuEvaluator;
+use lamina::render::oracle::VariantOracle;
 
 use super::args::CosinesArg;
 use super::{check_validation, GlobalArgs};
@@ -49,7 +50,7 @@ pub fn run(global: &GlobalArgs, args: &EvalArgs) -> Result<()> {
         Backend::Cpu => {
             oracle::check_cpu_variant(variant)?;
             let gpu = global.open_gpu()?;
-            let results = oracle::VariantOracle::new(&gpu, variant)?.evaluate(&layers, cosines)?;
+            let results = VariantOracle::new(&gpu, variant)?.evaluate(&layers, cosines)?;
             check_validation(&gpu)?;
             ("cpu", results)
         }

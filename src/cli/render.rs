@@ -8,7 +8,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use lamina::imageio;
 use lamina::material::{resolve_with_variant, Stack};
 use lamina::render::reference;
-use lamina::render::{Renderer, TargetFormat};
+use lamina::render::{PassKey, Renderer, TargetFormat};
 use lamina::tables::environment::EnvDesc;
 
 use super::args::{self, SceneArgs, SceneDefaults};
@@ -70,8 +70,14 @@ pub fn run(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
     print_pipelines(&mut gpu, None);
     let mut renderer = Renderer::new(&gpu, &equirect, EnvDesc::default())?;
     renderer.lighting = scene.lights.lighting()?;
+    let key = PassKey::new(
+        variant,
+        &layers,
+        stack.surface.as_deref(),
+        &renderer.lighting,
+    )?;
+    let pass = renderer.prepare(&key)?;
     renderer.set_surface(stack.surface.as_ref())?;
-    let pass = renderer.prepare(variant, &layers)?;
     let (width, height) = (scene.size.width, scene.size.height);
     for _ in 0..args.warmup {
         renderer.render(&pass, &layers, width, height)?;

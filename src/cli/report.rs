@@ -1,9 +1,9 @@
-//! `lamina report`: profiling/REPORT.md from sweep results (`lamina::profile::report`).
+//! `lamina report`: profiling/REPORT.md from sweep results (`lamina::study::report`).
 
 use std::path::PathBuf;
 
 use anyhow::Result;
-use lamina::profile::report;
+use lamina::study::report;
 
 use super::studies;
 

@@ -1,15 +1,17 @@
-//! `lamina sweep`: a study file or a suite (`lamina::profile::sweep`) — its cases listed, run
+//! `lamina sweep`: a study file or a suite (`lamina::study`) — its cases listed, run
 //! interleaved, written as results, charts and a report.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use indicatif::ProgressBar;
 use lamina::imageio;
 use lamina::profile::counter::CounterSetup;
-use lamina::profile::{prebuild, report, sweep};
+use lamina::study::run::{run_suite, Event, SuiteRun};
+use lamina::study::{self, report};
 
 use super::args::{CounterArg, EnvArg};
-use super::{asset_path, check_validation, progress_bar, studies, GlobalArgs};
+use super::{asset_path, progress_bar, studies, GlobalArgs};
 
 #[derive(clap::Args)]
 pub struct SweepArgs {
@@ -32,13 +34,13 @@ pub struct SweepArgs {
 }
 
 pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
-    let (mut list, suite) = sweep::load(&args.file)?;
+    let (mut list, suite) = study::load(&args.file)?;
     if !args.study.is_empty() {
         select_studies(&args.file, &mut list, &args.study)?;
     }
     match args.counter {
         Some(CounterArg::Instructions) => {
-            list.iter_mut().for_each(sweep::Study::count_instructions)
+            list.iter_mut().for_each(study::Study::count_instructions)
         }
         Some(CounterArg::None) => list.iter_mut().for_each(|s| s.counter = None),
         None => {}
@@ -48,7 +50,7 @@ pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
         let lighting = args.env.lights.lighting()?;
         list.iter_mut().for_each(|s| s.lighting = lighting.clone());
     }
-    let dir_of = |s: &sweep::Study| sweep::output_dir(&args.out, s, suite);
+    let dir_of = |s: &study::Study| study::output_dir(&args.out, s, suite);
     print_plan(args, &list, &dir_of);
     if args.dry_run {
         for s in &list {
@@ -73,78 +75,19 @@ pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
         None
     };
     let started = std::time::Instant::now();
-    if prebuild::worthwhile(&gpu) {
-        let variants = prebuild::table_variants(
-            list.iter()
-                .flat_map(|s| s.points.iter().map(|p| p.case.variant)),
-        );
-        let exe = std::env::current_exe().context("locating the lamina executable")?;
-        let mut worker_args = vec!["--device".to_owned(), gpu.device.report.name.clone()];
-        if global.validation {
-            worker_args.push("--validation".to_owned());
-        }
-        match prebuild::run(&exe, &worker_args, &variants) {
-            Ok(took) => println!(
-                "  built or loaded the tables on every core in {:.1} s",
-                took.as_secs_f64()
-            ),
-            Err(e) => eprintln!("warning: {e}; the studies build their tables themselves"),
-        }
-    }
-    // Every study timed first, then all the counts in one pool of workers (each worker starts
-    // once and compiles each shader under valgrind once for the whole suite).
-    let mut timed = Vec::with_capacity(list.len());
-    for (k, study) in list.iter().enumerate() {
-        let bar = progress_bar(&format!("[{}/{}] {}", k + 1, list.len(), study.name));
-        let study_started = std::time::Instant::now();
-        timed.push(sweep::time(
-            &gpu,
-            &equirect,
-            study,
-            &mut |what, done, total| {
-                bar.set_message(what.to_owned());
-                bar.set_length(total as u64);
-                bar.set_position(done as u64);
-            },
-        )?);
-        bar.finish_and_clear();
-        check_validation(&gpu)?;
-        println!(
-            "  timed {} in {:.1} s",
-            study.name,
-            study_started.elapsed().as_secs_f64()
-        );
-    }
-    if let Some(setup) = &setup {
-        let count_started = std::time::Instant::now();
-        let bar = progress_bar("instructions (callgrind)");
-        bar.set_message("counted");
-        sweep::count(&list, &mut timed, setup, |done, total| {
-            bar.set_length(total as u64);
-            bar.set_position(done as u64);
-        })?;
-        bar.finish_and_clear();
-        println!(
-            "  counted instructions in {:.1} s",
-            count_started.elapsed().as_secs_f64()
-        );
-    }
-    let mut written = Vec::new();
-    for (study, timed) in list.iter().zip(timed) {
-        let mut timed = timed;
-        let error_maps = std::mem::take(&mut timed.error_maps);
-        let (results, meta) = sweep::finish(study, timed, setup.is_some());
-        let dir = dir_of(study);
-        let charts = sweep::write(&dir, study, &results, &meta, &error_maps)?;
-        println!("\n== {} ({})", study.title, study.name);
-        print!("{}", results.table());
-        println!(
-            "wrote {}/results.json, results.csv, {} chart(s)",
-            dir.display(),
-            charts.len()
-        );
-        written.push(dir);
-    }
+    let mut bar: Option<ProgressBar> = None;
+    let written = run_suite(
+        &SuiteRun {
+            gpu: &gpu,
+            equirect: &equirect,
+            counter: setup.as_ref(),
+            validation: global.validation,
+            out: &args.out,
+            suite,
+        },
+        &list,
+        &mut |event| show(event, &mut bar),
+    )?;
     let report_path = args.out.join("REPORT.md");
     report::write(&written, &report_path)?;
     println!(
@@ -156,9 +99,68 @@ pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
     Ok(())
 }
 
+/// Prints what the suite's run does: a progress bar per phase, a line per phase done, each
+/// study's table once written.
+fn show(event: Event<'_>, bar: &mut Option<ProgressBar>) {
+    match event {
+        Event::Prebuilt(Ok(took)) => println!(
+            "  built or loaded the tables on every core in {:.1} s",
+            took.as_secs_f64()
+        ),
+        Event::Prebuilt(Err(e)) => {
+            eprintln!("warning: {e}; the studies build their tables themselves")
+        }
+        Event::Timing {
+            index,
+            count,
+            study,
+        } => {
+            *bar = Some(progress_bar(&format!(
+                "[{}/{}] {}",
+                index + 1,
+                count,
+                study.name
+            )))
+        }
+        Event::Progress { what, done, total } => {
+            if let Some(bar) = bar {
+                bar.set_message(what.to_owned());
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            }
+        }
+        Event::Timed { study, took } => {
+            if let Some(bar) = bar.take() {
+                bar.finish_and_clear();
+            }
+            println!("  timed {} in {:.1} s", study.name, took.as_secs_f64());
+        }
+        Event::Counting => *bar = Some(progress_bar("instructions (callgrind)")),
+        Event::Counted { took } => {
+            if let Some(bar) = bar.take() {
+                bar.finish_and_clear();
+            }
+            println!("  counted instructions in {:.1} s", took.as_secs_f64());
+        }
+        Event::Written {
+            study,
+            results,
+            dir,
+            charts,
+        } => {
+            println!("\n== {} ({})", study.title, study.name);
+            print!("{}", results.table());
+            println!(
+                "wrote {}/results.json, results.csv, {charts} chart(s)",
+                dir.display()
+            );
+        }
+    }
+}
+
 /// Keeps the studies `names` asks for, in the suite's order; a name the suite lacks is an
 /// error that lists the suite's studies.
-fn select_studies(file: &Path, list: &mut Vec<sweep::Study>, names: &[String]) -> Result<()> {
+fn select_studies(file: &Path, list: &mut Vec<study::Study>, names: &[String]) -> Result<()> {
     if let Some(missing) = names.iter().find(|n| !list.iter().any(|s| &s.name == *n)) {
         let known: Vec<&str> = list.iter().map(|s| s.name.as_str()).collect();
         anyhow::bail!(
@@ -172,7 +174,7 @@ fn select_studies(file: &Path, list: &mut Vec<sweep::Study>, names: &[String]) -
 }
 
 /// The studies and their cases, before anything runs.
-fn print_plan(args: &SweepArgs, list: &[sweep::Study], dir_of: &dyn Fn(&sweep::Study) -> PathBuf) {
+fn print_plan(args: &SweepArgs, list: &[study::Study], dir_of: &dyn Fn(&study::Study) -> PathBuf) {
     let cases: usize = list.iter().map(|s| s.points.len()).sum();
     println!(
         "{}: {}, {cases} case(s) (+ ggx baselines)",

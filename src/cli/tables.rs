@@ -8,17 +8,18 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Result;
+use lamina::cache;
+use lamina::chart::HeatMap;
 use lamina::imageio;
 use lamina::model::tir::{AnalyticTir, FitTir};
 use lamina::model::tir_fit::COEFFICIENTS;
-use lamina::profile::chart::HeatMap;
-use lamina::profile::stats::MinMeanMax;
+use lamina::stats::MinMeanMax;
 use lamina::tables::fgd::{self, Filter, Grid, GridKind};
 use lamina::tables::fgd_study::{self, ResampledStudy, EXACT_RESOLUTION, G2_FORM, PROBE_POINTS};
 use lamina::tables::split_sum::{self, SplitSumTable};
 use lamina::tables::tir_fit::{self, TirFit};
 use lamina::tables::tir_study::{self, TirStudy};
-use lamina::tables::{cache, spot, tir};
+use lamina::tables::{spot, tir};
 use lamina::Gpu;
 
 use super::{check_validation, follow, progress_bar, GlobalArgs};
@@ -220,7 +221,7 @@ fn write_error_map(
 
 fn tir(gpu: &Gpu, args: &TablesArgs) -> Result<()> {
     let samples = args.samples.unwrap_or(tir::DEFAULT_SAMPLES);
-    let dir = cache::dir();
+    let dir = cache::tables_dir();
     let (table, cached, seconds) = load_table("tir table (η slices)", |progress| {
         tir_study::load(
             gpu,
@@ -350,7 +351,7 @@ fn karis(gpu: &Gpu, args: &TablesArgs) -> Result<()> {
 /// Loads (or builds) a 4-D grid and prints its first two lines.
 fn load_grid(gpu: &Gpu, kind: GridKind, args: &TablesArgs) -> Result<Grid> {
     let samples = args.samples.unwrap_or(fgd::GRID_SAMPLES);
-    let dir = cache::dir();
+    let dir = cache::tables_dir();
     let what = match kind {
         GridKind::Full4d => "fgd 4-D table (κ slices)",
         GridKind::DielectricBelow1 => "fgd η<1 table",
@@ -477,7 +478,7 @@ fn belcour(gpu: &Gpu, args: &TablesArgs) -> Result<()> {
         gpu,
         args.size,
         samples,
-        cache::dir().as_deref(),
+        cache::tables_dir().as_deref(),
         args.rebuild,
     )?;
     println!(

@@ -8,7 +8,8 @@ use std::path::Path;
 use toml::{Table, Value};
 
 use super::artist::gulbrandsen;
-use super::surface::{Coords, Field, LayerSurface, Shape, Source, SourceReader};
+use super::source::SourceReader;
+use super::surface::{Coords, Field, LayerSurface, Shape, Source};
 use super::MaterialError;
 use crate::model::LayerParams;
 use crate::variant::Model;
@@ -94,16 +95,12 @@ impl LayerReader<'_> {
                 "missing; the GGX α of the layer's top interface, in [0, 1]",
             )
         })?;
-        let layer = LayerParams {
-            ior,
-            kappa,
-            roughness,
-            depth: self.scalar("depth", &DEPTH)?.unwrap_or(0.0),
-            sigma_s: self.rgb("sigma_s", &SIGMA)?.unwrap_or([0.0; 3]),
-            sigma_a: self.rgb("sigma_a", &SIGMA)?.unwrap_or([0.0; 3]),
-            g: self.scalar("g", &HG_G)?.unwrap_or(0.0),
-            diffuse: None,
-        };
+        let layer = LayerParams::conductor(ior, kappa, roughness).with_medium(
+            self.scalar("depth", &DEPTH)?.unwrap_or(0.0),
+            self.rgb("sigma_s", &SIGMA)?.unwrap_or([0.0; 3]),
+            self.rgb("sigma_a", &SIGMA)?.unwrap_or([0.0; 3]),
+            self.scalar("g", &HG_G)?.unwrap_or(0.0),
+        );
         self.check_conductor_and_medium(&layer)?;
         self.coverage()?;
         let sources = self.sources.take();
@@ -138,16 +135,7 @@ impl LayerReader<'_> {
             ));
         }
         let rho = self.rgb("diffuse", &UNIT)?.expect("checked above");
-        let layer = LayerParams {
-            ior: [1.0; 3],
-            kappa: [0.0; 3],
-            roughness: 1.0,
-            depth: 0.0,
-            sigma_s: [0.0; 3],
-            sigma_a: [0.0; 3],
-            g: 0.0,
-            diffuse: Some(rho),
-        };
+        let layer = LayerParams::diffuse_base(rho);
         self.coverage()?;
         let sources = self.sources.take();
         Ok((

@@ -54,6 +54,7 @@ pub mod random;
 pub mod simplify;
 #[cfg(test)]
 mod simplify_properties;
+mod source;
 pub mod surface;
 #[cfg(test)]
 mod tests;

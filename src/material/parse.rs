@@ -11,7 +11,8 @@ use toml::{Table, Value};
 use std::sync::Arc;
 
 use super::layer::LayerReader;
-use super::surface::{self, Surface};
+use super::source;
+use super::surface::Surface;
 use super::{MaterialError, Stack};
 use crate::variant::{Model, MAX_LAYERS_LIMIT};
 
@@ -55,7 +56,7 @@ pub(super) fn parse(text: &str, path: &Path) -> Result<Stack, MaterialError> {
         })
         .collect::<Result<_, _>>()?;
     let (layers, surfaces): (Vec<_>, Vec<_>) = read.into_iter().unzip();
-    let resolution = surface::resolution(&table, path)?;
+    let resolution = source::resolution(&table, path)?;
     let varies = surfaces.iter().any(|s| !s.sources.is_empty());
     if !varies && table.contains_key("map_resolution") {
         let message = "`map_resolution`: sizes the maps, and no layer has one (a field given \

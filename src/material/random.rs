@@ -53,16 +53,9 @@ pub fn random_stack(rng: &mut Rng, model: Option<Model>, max_layers: usize) -> (
             let conductor = conductor_base && i == n - 1;
             let roughness = pick(rng, 0.0, 1.0, &[1e-4, 0.5]);
             if conductor {
-                return LayerParams {
-                    ior: rgb(rng, 1e-3, 400.0, &[0.05, 1.0, 1.5]),
-                    kappa: rgb(rng, 1e-6, 200.0, &[1e-3, 1.0, 5.0]),
-                    roughness,
-                    depth: 0.0,
-                    sigma_s: [0.0; 3],
-                    sigma_a: [0.0; 3],
-                    g: 0.0,
-                    diffuse: None,
-                };
+                let ior = rgb(rng, 1e-3, 400.0, &[0.05, 1.0, 1.5]);
+                let kappa = rgb(rng, 1e-6, 200.0, &[1e-3, 1.0, 5.0]);
+                return LayerParams::conductor(ior, kappa, roughness);
             }
             // Relative IORs at, next to and far from 1, below 1 as often as above.
             let relative = match rng.unit() {
@@ -75,32 +68,28 @@ pub fn random_stack(rng: &mut Rng, model: Option<Model>, max_layers: usize) -> (
             eta_above = eta;
             let medium = model == Model::Tm6 && rng.unit() < 0.7;
             let lossless = rng.unit() < 0.3;
-            LayerParams {
-                ior: [eta; 3],
-                kappa: [0.0; 3],
-                roughness,
-                depth: if medium {
-                    pick(rng, 0.0, 100.0, &[1e-6, 49.0])
-                } else {
-                    0.0
-                },
-                sigma_s: if medium {
-                    rgb(rng, 0.0, 1000.0, &[222.0, 1e-6])
-                } else {
-                    [0.0; 3]
-                },
-                sigma_a: if medium && !lossless {
-                    rgb(rng, 0.0, 1000.0, &[1e-6, 0.1])
-                } else {
-                    [0.0; 3]
-                },
-                g: if medium {
-                    pick(rng, -0.99, 0.99, &[0.0, 0.999_999, -0.999_999])
-                } else {
-                    0.0
-                },
-                diffuse: None,
-            }
+            // Drawn in this order: depth, σs, σa, g.
+            let depth = if medium {
+                pick(rng, 0.0, 100.0, &[1e-6, 49.0])
+            } else {
+                0.0
+            };
+            let sigma_s = if medium {
+                rgb(rng, 0.0, 1000.0, &[222.0, 1e-6])
+            } else {
+                [0.0; 3]
+            };
+            let sigma_a = if medium && !lossless {
+                rgb(rng, 0.0, 1000.0, &[1e-6, 0.1])
+            } else {
+                [0.0; 3]
+            };
+            let g = if medium {
+                pick(rng, -0.99, 0.99, &[0.0, 0.999_999, -0.999_999])
+            } else {
+                0.0
+            };
+            LayerParams::dielectric(eta, roughness).with_medium(depth, sigma_s, sigma_a, g)
         })
         .collect();
     let mu = pick(rng, 1e-4, 1.0, &[1e-3, 0.5]);

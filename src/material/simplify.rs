@@ -548,10 +548,10 @@ mod tests {
     use crate::material::presets;
     use crate::material::simplify_properties::{agree, ExactTir, TOLERANCE};
     use crate::model::fgd::ExactFgd;
+    use crate::model::oracle::evaluate_model;
     use crate::model::tir::AnalyticTir;
     use crate::model::tm2::tests::{coat, gold};
     use crate::model::{Evaluation, NoTir, Tir};
-    use crate::oracle::evaluate_model;
     use crate::variant::G2;
 
     fn medium(layer: LayerParams, depth: f64, sigma_s: f64, sigma_a: f64) -> LayerParams {

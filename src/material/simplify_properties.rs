@@ -24,11 +24,11 @@ use super::random::random_stack;
 use super::simplify::{roles, simplify, Role, Simplified, Step};
 use super::Stack;
 use crate::model::fgd::ExactFgd;
+use crate::model::oracle;
 use crate::model::random::{case_seed, Rng};
 use crate::model::tir::{trapped_fraction, AnalyticTir, ConstantTir, FitTir, CONSTANT_FRACTION};
 use crate::model::tir_fit::COEFFICIENTS;
 use crate::model::{hg, Evaluation, Fgd, LayerParams, Lobe, NoTir, Tir, IOR_AIR};
-use crate::oracle;
 use crate::variant::{Model, G2, MAX_LAYERS_LIMIT};
 
 /// Cases per model with the coarse FGD and the TIR providers (about 2 s for both models).

@@ -6,7 +6,8 @@
 
 use toml::Value;
 
-use super::surface::{source_text, Field, LayerSurface};
+use super::source::source_text;
+use super::surface::{Field, LayerSurface};
 use super::Stack;
 use crate::model::LayerParams;
 use crate::variant::{Axis, Model};

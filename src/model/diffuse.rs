@@ -28,7 +28,7 @@
 //! a white base under a lossless stack gives R + w_d = R + T = 1.
 
 use super::adding::{avg, map3, Component, Rgb, Slab};
-use super::{fresnel, tm6, LayerParams, INDEX_MATCHED, IOR_AIR};
+use super::{fresnel, medium, LayerParams, INDEX_MATCHED, IOR_AIR};
 
 /// Gauss–Legendre points of the hemispherical averages (the integrand is smooth from the
 /// rarer side, so 16 points are exact to f64 rounding for η up to 400; the tests check).
@@ -93,7 +93,7 @@ pub(crate) fn slab(above: &[LayerParams], media: bool) -> Slab {
         }
         if media && layer.depth > 0.0 {
             // t_ff holds the unscattered transmission too (tm6's Component6::medium).
-            let m = tm6::medium_factors(layer, 0.5);
+            let m = medium::medium_factors(layer, 0.5);
             s = s.over(&Component::symmetric(m.r_fb, m.t_ff));
         }
     }
@@ -118,15 +118,11 @@ mod tests {
     use super::*;
     use crate::model::fgd::ExactFgd;
     use crate::model::tm2::tests::coat;
-    use crate::model::{tm2, NoTir};
+    use crate::model::{tm2, tm6, NoTir};
     use crate::variant::G2;
 
     fn base(rho: [f64; 3]) -> LayerParams {
-        LayerParams {
-            roughness: 1.0,
-            diffuse: Some(rho),
-            ..coat(1.0, 0.0)
-        }
+        LayerParams::diffuse_base(rho)
     }
 
     fn reflectance(model6: bool, stack: &[LayerParams], mu: f64) -> [f64; 3] {
@@ -186,12 +182,7 @@ mod tests {
             vec![coat(1.5, 0.1)],
             vec![coat(1.5, 0.05), coat(1.3, 0.3), coat(2.0, 0.6)],
             vec![coat(1.2, 0.0), coat(1.0, 0.2), coat(1.8, 1.0)],
-            vec![LayerParams {
-                depth: 2.0,
-                sigma_s: [3.0, 1.0, 0.5],
-                g: 0.4,
-                ..coat(1.5, 0.2)
-            }],
+            vec![coat(1.5, 0.2).with_medium(2.0, [3.0, 1.0, 0.5], [0.0; 3], 0.4)],
         ];
         let mut lowest = 1.0f64;
         for stack in coats {

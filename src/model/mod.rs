@@ -17,7 +17,9 @@ pub mod fgd;
 pub mod fresnel;
 pub mod hg;
 pub mod light;
+pub mod medium;
 pub mod microfacet;
+pub mod oracle;
 pub mod random;
 pub mod tir;
 pub mod tir_fit;
@@ -35,6 +37,25 @@ pub const INDEX_MATCHED: f64 = 1e-5;
 /// |η − 1| below which a dielectric interface reflects nothing: the FGD tables do not resolve
 /// it (`fgd=karis`'s B term does not vanish as η → 1).
 pub const REFLECTS_NOTHING: f64 = 1e-3;
+
+/// The 6-flux model's largest lobe count, `TM6_LOBES_PER_LAYER`·n − `TM6_LOBES_LESS` for n
+/// layers ([`max_lobes`]).
+pub const TM6_LOBES_PER_LAYER: u32 = 6;
+pub const TM6_LOBES_LESS: u32 = 2;
+
+/// Most lobes one evaluation of a stack of `layers` layers can emit under `model` (the
+/// shaders' `TM_MAX_LOBES`, generated from the constants above): one per layer (2-flux); in
+/// 6-flux, the first interface emits its primary lobe alone and each later component (medium,
+/// interface, …) up to three, most when every layer is a dielectric with a medium:
+/// 1 + 3·(2n − 1) = 6n − 2.
+pub fn max_lobes(model: crate::variant::Model, layers: usize) -> usize {
+    match model {
+        crate::variant::Model::Tm6 => {
+            TM6_LOBES_PER_LAYER as usize * layers - TM6_LOBES_LESS as usize
+        }
+        _ => layers,
+    }
+}
 
 /// One layer as the model consumes it: the interface at its top (complex IOR of the layer,
 /// GGX α of the interface) and, for the 6-flux model, the homogeneous medium filling it.
@@ -55,7 +76,61 @@ pub struct LayerParams {
     pub diffuse: Option<[f64; 3]>,
 }
 
+/// Gold's complex IOR per RGB channel (ALGORITHMS.md §12.2): the baseline's default material.
+pub const GOLD_IOR: [f64; 3] = [0.143245, 0.377423, 1.43919];
+pub const GOLD_KAPPA: [f64; 3] = [3.98479, 2.3847, 1.60434];
+
 impl LayerParams {
+    /// A dielectric interface of IOR `ior` in every channel and GGX roughness `roughness`,
+    /// with no medium below it.
+    pub fn dielectric(ior: f64, roughness: f64) -> Self {
+        Self {
+            ior: [ior; 3],
+            kappa: [0.0; 3],
+            roughness,
+            depth: 0.0,
+            sigma_s: [0.0; 3],
+            sigma_a: [0.0; 3],
+            g: 0.0,
+            diffuse: None,
+        }
+    }
+
+    /// A conductor of complex IOR (`ior`, `kappa`) per channel and GGX roughness `roughness`.
+    pub fn conductor(ior: [f64; 3], kappa: [f64; 3], roughness: f64) -> Self {
+        Self {
+            ior,
+            kappa,
+            ..Self::dielectric(1.0, roughness)
+        }
+    }
+
+    /// Rough gold ([`GOLD_IOR`], [`GOLD_KAPPA`]).
+    pub fn gold(roughness: f64) -> Self {
+        Self::conductor(GOLD_IOR, GOLD_KAPPA, roughness)
+    }
+
+    /// A Lambertian base of albedo `rho` ([`diffuse`]); its interface fields are unused.
+    pub fn diffuse_base(rho: [f64; 3]) -> Self {
+        Self {
+            roughness: 1.0,
+            diffuse: Some(rho),
+            ..Self::dielectric(1.0, 0.0)
+        }
+    }
+
+    /// This layer with a homogeneous medium (6-flux) of thickness `depth`, coefficients
+    /// `sigma_s` and `sigma_a` per channel and HG asymmetry `g`.
+    pub fn with_medium(self, depth: f64, sigma_s: [f64; 3], sigma_a: [f64; 3], g: f64) -> Self {
+        Self {
+            depth,
+            sigma_s,
+            sigma_a,
+            g,
+            ..self
+        }
+    }
+
     pub fn is_conductor(&self) -> bool {
         self.kappa.iter().any(|&k| k > 0.0)
     }

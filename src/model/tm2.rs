@@ -172,24 +172,11 @@ pub(crate) mod tests {
     use crate::variant::G2;
 
     pub fn coat(ior: f64, roughness: f64) -> LayerParams {
-        LayerParams {
-            ior: [ior; 3],
-            kappa: [0.0; 3],
-            roughness,
-            depth: 0.0,
-            sigma_s: [0.0; 3],
-            sigma_a: [0.0; 3],
-            g: 0.0,
-            diffuse: None,
-        }
+        LayerParams::dielectric(ior, roughness)
     }
 
     pub fn gold(roughness: f64) -> LayerParams {
-        LayerParams {
-            ior: [0.143245, 0.377423, 1.43919],
-            kappa: [3.98479, 2.3847, 1.60434],
-            ..coat(1.0, roughness)
-        }
+        LayerParams::gold(roughness)
     }
 
     fn close(a: [f64; 3], b: [f64; 3], tol: f64) -> bool {

@@ -6,75 +6,13 @@
 //! reference's 6×6 matrix products and 3×3 extraction where those exist and stay finite where
 //! they do not (thick media, opaque components).
 //!
-//! One departure from the reference, where it returned wrong values rather than failing: its
-//! medium clamped the optical depth τ to 45/max(σ_ext) (and 45/max(γ)) to keep sinh, cosh and
-//! 1/T finite. The same τ also drives the scattered flux, which decays at γ ≪ σ_ext in a
-//! scattering medium, so a medium of optical depth 10⁴ transmitted like one of 45/σ_ext·γ
-//! (T = 0.003 through four layers of σ_s = 222, depth 49). The two-stream factors are written
-//! here in forms that only decay (e^{−γτ}, e^{−2γτ}), so no clamp is needed.
+//! The media's two-stream factors are [`super::medium`]'s.
 
 use super::adding::{avg, bound, map3, Component, Component6, Rgb, Slab6};
 use super::hg::{self, safe_ratio};
+use super::medium::medium_factors;
 use super::tm2;
 use super::{albedo, diffuse, Evaluation, Fgd, LayerParams, Lobe, Tir, INDEX_MATCHED, IOR_AIR};
-
-/// 1 − e^{−x} for x ≥ 0, without cancellation at small x.
-fn one_minus_exp_neg(x: f64) -> f64 {
-    -(-x).exp_m1()
-}
-
-/// A medium's two-stream factors (§5.3, numerics §5.8).
-pub(crate) struct Medium {
-    pub t: Rgb,
-    pub r_fb: Rgb,
-    pub t_ff: Rgb,
-    pub g_rfb: f64,
-    pub g_tff: f64,
-}
-
-/// Back-reflection and forward transmission of the two-stream system (a, b) over optical
-/// depth τ: with S = sinh(γτ), C = cosh(γτ), r = S·b/(Cγ + S·a) and t = γ/(Cγ + S·a), here
-/// divided through by e^{γτ}/2 so that nothing grows with τ. γ² = a² − b² is taken as
-/// (a − b)(a + b) from those sums as the caller forms them: a − b is the absorption alone in a
-/// nearly lossless medium, and a² − b² lost it to f32 rounding (γ = 0, then 0/0 on the GPU).
-fn two_stream(a: f64, b: f64, a_minus_b: f64, a_plus_b: f64, tau: f64) -> (f64, f64) {
-    let gamma = (a_minus_b * a_plus_b).max(0.0).sqrt();
-    let x = gamma * tau;
-    let (decay, spread) = ((-x).exp(), one_minus_exp_neg(2.0 * x));
-    let den = gamma * (2.0 - spread) + a * spread;
-    (b * spread / den, 2.0 * gamma * decay / den)
-}
-
-/// The two-stream factors of a medium (energies, then g-weighted), with a = σ_ext − σ_sf and
-/// b = σ_sb, resp. a_g = σ_ext − g·σ_sf and b_g = −g·σ_sb; their sums and differences written
-/// as sums of non-negative terms.
-pub(crate) fn medium_factors(layer: &LayerParams, mu: f64) -> Medium {
-    let g = layer.g;
-    let tau = layer.depth / mu.max(1e-7);
-    let (mut r_fb, mut t_ff) = ([0.0; 3], [0.0; 3]);
-    let (mut rg, mut tg) = ([0.0; 3], [0.0; 3]);
-    let mut t = [0.0; 3];
-    for c in 0..3 {
-        let sigma_k = layer.sigma_a[c].max(1e-7);
-        let sigma_sb = layer.sigma_s[c] * hg::lh_norm(g);
-        let sigma_sf = layer.sigma_s[c] - sigma_sb;
-        let sigma_ext = layer.sigma_s[c] + sigma_k;
-        let a = sigma_sb + sigma_k;
-        (r_fb[c], t_ff[c]) = two_stream(a, sigma_sb, sigma_k, 2.0 * sigma_sb + sigma_k, tau);
-        let a_g = sigma_ext - sigma_sf * g;
-        let minus = sigma_sf * (1.0 - g) + sigma_sb * (1.0 + g) + sigma_k;
-        let plus = layer.sigma_s[c] * (1.0 - g) + sigma_k;
-        (rg[c], tg[c]) = two_stream(a_g, -sigma_sb * g, minus, plus, tau);
-        t[c] = (-sigma_ext * tau).exp();
-    }
-    Medium {
-        t,
-        r_fb,
-        t_ff,
-        g_rfb: avg(map3(|c| safe_ratio(rg[c], r_fb[c]))),
-        g_tff: avg(map3(|c| safe_ratio(tg[c], t_ff[c]))),
-    }
-}
 
 /// What a component contributes: an interface's or a medium's operators (energy, asymmetry),
 /// a substrate, or nothing (an index-matched interface, an empty medium).
@@ -87,169 +25,239 @@ enum Step {
 
 /// Evaluates the 6-flux model for view cosine `cos_theta` (§5.5–5.7).
 pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn Tir) -> Evaluation {
-    let mut e = Slab6::empty();
-    let mut g = Slab6::empty();
-    let mut prev = [[0.0; 3]; 3];
-    let mut prev_g = [[0.0; 3]; 3];
-    let (mut g_t0i, mut g_st0i) = (1.0, 1.0);
-    let (mut primary, mut backward) = (false, false);
-    let mut eta_above = IOR_AIR;
-    let mut cos_i = cos_theta;
-    let mut transmittance = [0.0; 3];
-    let mut lobes = Vec::new();
-    let mut retro_mask = 0u32;
+    let mut walk = Walk::new(cos_theta);
     for (i, layer) in stack.iter().enumerate() {
         if let Some(rho) = layer.diffuse {
-            // A Lambertian base under the layers above (`diffuse`): every flux class that
-            // reaches it feeds one diffuse lobe.
-            let t_view = map3(|c| e.down[0][c] + e.down[1][c] + e.down[2][c]);
-            let weight = diffuse::lobe_weight(t_view, rho, &diffuse::slab(&stack[..i], true));
-            lobes.push(Lobe {
-                weight,
-                roughness: 1.0,
-                diffuse: true,
-            });
-            prev[0] = map3(|c| prev[0][c] + weight[c]);
-            transmittance = [0.0; 3];
+            walk.diffuse_base(&stack[..i], rho);
             break;
         }
-        let mut steps = Vec::with_capacity(2);
         if layer.is_conductor() {
-            let r_c = map3(|c| {
-                albedo(
-                    fgd,
-                    cos_i,
-                    layer.roughness,
-                    layer.ior[c] / eta_above,
-                    layer.kappa[c] / eta_above,
-                )
-            });
-            steps.push(Step::Substrate {
-                r_c,
-                g_r: hg::g_of_alpha(layer.roughness),
-            });
-        } else {
-            let eta = avg(layer.ior) / eta_above;
-            if (eta - 1.0).abs() < INDEX_MATCHED {
-                steps.push(Step::Nothing);
-            } else {
-                let f = tm2::dielectric(cos_i, eta, layer.roughness, fgd);
-                let next = stack.get(i + 1);
-                let g_next = next.map_or(0.0, |l| hg::g_of_alpha(l.roughness));
-                let g_medium = if layer.depth > 0.0 {
-                    medium_factors(layer, f.mu_t).g_tff
-                } else {
-                    1.0
-                };
-                // Primary path (§4.4) and secondary path through the medium down and up (§5.5).
-                let g_t0j = hg::refract(g_t0i, 1.0 / eta) * f.g_t;
-                let g_t0j_r = g_t0j * g_next;
-                let g_t0j_rt = hg::refract(g_t0j_r, eta) * f.g_tp;
-                let g_st0j = hg::refract(g_st0i, 1.0 / eta) * f.g_t;
-                let g_st0j_r = g_st0j * g_medium * g_next * g_medium;
-                let g_st0j_rt = hg::refract(g_st0j_r, eta) * f.g_tp;
-                let (gt, gtp) = (safe_ratio(g_t0j, g_t0i), safe_ratio(g_t0j_rt, g_t0j_r));
-                let (gst, gstp) = (safe_ratio(g_st0j, g_st0i), safe_ratio(g_st0j_rt, g_st0j_r));
-                let (mut r, mut t, mut rp, mut tp) = (f.r, 1.0 - f.r, f.r, 1.0 - f.r);
-                let (mut rs, mut ts, mut rsp, mut tsp) = (r, t, rp, tp);
-                if eta < 1.0 {
-                    let tau = tir.tir(f.mu, hg::alpha_of_g(g_t0i), eta) * t;
-                    r += tau;
-                    t -= tau;
-                    let tau = tir.tir(f.mu, hg::alpha_of_g(g_st0i), eta) * ts;
-                    rs += tau;
-                    ts -= tau;
-                } else {
-                    let tau = tir.tir(f.mu_t, hg::alpha_of_g(g_t0j_r), 1.0 / eta) * tp;
-                    rp += tau;
-                    tp -= tau;
-                    let tau = tir.tir(f.mu_t, hg::alpha_of_g(g_st0j_r), 1.0 / eta) * tsp;
-                    rsp += tau;
-                    tsp -= tau;
-                }
-                let energy = Component6::interface(
-                    Component::lossless(r, t, rp, tp),
-                    Component::lossless(rs, ts, rsp, tsp),
-                );
-                let asym = Component6::interface(
-                    Component::weighted(r * f.g_r, t * gt, rp * f.g_r, tp * gtp),
-                    Component::weighted(rs * f.g_r, ts * gst, rsp * f.g_r, tsp * gstp),
-                );
-                steps.push(Step::Interface(energy, asym));
-                g_t0i = g_t0j;
-                g_st0i = g_st0j;
-                cos_i = f.mu_t;
-                eta_above = avg(layer.ior);
-            }
-            if layer.depth > 0.0 {
-                let m = medium_factors(layer, cos_i);
-                let gr = map3(|c| m.r_fb[c] * m.g_rfb);
-                let gt = map3(|c| m.t_ff[c] * m.g_tff);
-                steps.push(Step::Medium(
-                    Component6::medium(m.t, m.r_fb, m.t_ff),
-                    Component6::medium_weighted(m.t, m.r_fb, m.t_ff, gr, gt),
-                ));
-            } else {
-                steps.push(Step::Nothing);
-            }
-        }
-        for step in steps {
-            let (up, up_g) = match step {
-                Step::Substrate { r_c, g_r } => {
-                    primary = true;
-                    transmittance = [0.0; 3];
-                    let up = e.over_base(r_c);
-                    let up_g = g.over_base(map3(|c| r_c[c] * g_r));
-                    let up_g = std::array::from_fn(|k| map3(|c| bound(up_g[k][c], up[k][c])));
-                    (up, up_g)
-                }
-                Step::Interface(energy, asym) | Step::Medium(energy, asym) => {
-                    // Request flags (§5.7): primary after the first interface, backward after
-                    // the first medium, forward once both exist.
-                    if matches!(step, Step::Interface(..)) {
-                        primary = true;
-                    } else {
-                        backward = true;
-                    }
-                    e = e.over(&energy);
-                    g = g.over(&asym).bounded_by(&e);
-                    transmittance = map3(|c| e.down[0][c] + e.down[1][c] + e.down[2][c]);
-                    (e.up, g.up)
-                }
-                Step::Nothing => {
-                    transmittance = map3(|c| e.down[0][c] + e.down[1][c] + e.down[2][c]);
-                    (e.up, g.up)
-                }
-            };
-            // Primary, secondary-forward, secondary-backward lobes, as the flags allow (§5.7).
-            let emit = [primary, primary && backward, backward];
-            for k in 0..3 {
-                if emit[k] {
-                    if k == 2 && lobes.len() < 32 {
-                        retro_mask |= 1 << lobes.len();
-                    }
-                    let g_lobe = avg(map3(|c| {
-                        safe_ratio(up_g[k][c] - prev_g[k][c], up[k][c] - prev[k][c])
-                    }));
-                    lobes.push(Lobe {
-                        weight: map3(|c| (up[k][c] - prev[k][c]).max(0.0)),
-                        roughness: hg::alpha_of_g(g_lobe.min(1.0)),
-                        diffuse: false,
-                    });
-                }
-                prev[k] = up[k];
-                prev_g[k] = up_g[k];
-            }
-        }
-        if layer.is_conductor() {
+            let step = walk.substrate(layer, fgd);
+            walk.add(step);
             break;
+        }
+        let step = walk.interface(stack, i, fgd, tir);
+        walk.add(step);
+        let step = walk.medium(layer);
+        walk.add(step);
+    }
+    walk.finish()
+}
+
+/// The walk down the stack so far: the energy slab `e` and the asymmetry slab `g` (their
+/// upward fluxes as they grow: the lobes are their increments), the g of the primary and
+/// secondary paths transmitted down to the current component, which lobes the components so
+/// far allow (§5.7), and the mean direction's cosine in the current layer.
+struct Walk {
+    e: Slab6,
+    g: Slab6,
+    prev: [Rgb; 3],
+    prev_g: [Rgb; 3],
+    g_t0i: f64,
+    g_st0i: f64,
+    primary: bool,
+    backward: bool,
+    eta_above: f64,
+    cos_i: f64,
+    transmittance: Rgb,
+    lobes: Vec<Lobe>,
+    retro_mask: u32,
+}
+
+impl Walk {
+    fn new(cos_theta: f64) -> Self {
+        Self {
+            e: Slab6::empty(),
+            g: Slab6::empty(),
+            prev: [[0.0; 3]; 3],
+            prev_g: [[0.0; 3]; 3],
+            g_t0i: 1.0,
+            g_st0i: 1.0,
+            primary: false,
+            backward: false,
+            eta_above: IOR_AIR,
+            cos_i: cos_theta,
+            transmittance: [0.0; 3],
+            lobes: Vec::new(),
+            retro_mask: 0,
         }
     }
-    Evaluation {
-        reflectance: map3(|c| prev[0][c] + prev[1][c] + prev[2][c]),
-        transmittance,
-        lobes,
-        retro_mask,
+
+    /// A Lambertian base under the layers `above` (`diffuse`): every flux class that reaches
+    /// it feeds one diffuse lobe.
+    fn diffuse_base(&mut self, above: &[LayerParams], rho: Rgb) {
+        let e = &self.e;
+        let t_view = map3(|c| e.down[0][c] + e.down[1][c] + e.down[2][c]);
+        let weight = diffuse::lobe_weight(t_view, rho, &diffuse::slab(above, true));
+        self.lobes.push(Lobe {
+            weight,
+            roughness: 1.0,
+            diffuse: true,
+        });
+        self.prev[0] = map3(|c| self.prev[0][c] + weight[c]);
+        self.transmittance = [0.0; 3];
+    }
+
+    /// A conductor substrate, which ends the stack.
+    fn substrate(&self, layer: &LayerParams, fgd: &dyn Fgd) -> Step {
+        let r_c = map3(|c| {
+            albedo(
+                fgd,
+                self.cos_i,
+                layer.roughness,
+                layer.ior[c] / self.eta_above,
+                layer.kappa[c] / self.eta_above,
+            )
+        });
+        Step::Substrate {
+            r_c,
+            g_r: hg::g_of_alpha(layer.roughness),
+        }
+    }
+
+    /// The dielectric interface at the top of layer `i` (nothing when index-matched): its
+    /// energy and asymmetry operators for the primary and secondary classes, with the TIR
+    /// correction; moves the walk into the layer.
+    fn interface(&mut self, stack: &[LayerParams], i: usize, fgd: &dyn Fgd, tir: &dyn Tir) -> Step {
+        let layer = &stack[i];
+        let eta = avg(layer.ior) / self.eta_above;
+        if (eta - 1.0).abs() < INDEX_MATCHED {
+            return Step::Nothing;
+        }
+        let f = tm2::dielectric(self.cos_i, eta, layer.roughness, fgd);
+        let next = stack.get(i + 1);
+        let g_next = next.map_or(0.0, |l| hg::g_of_alpha(l.roughness));
+        let g_medium = if layer.depth > 0.0 {
+            medium_factors(layer, f.mu_t).g_tff
+        } else {
+            1.0
+        };
+        let (g_t0i, g_st0i) = (self.g_t0i, self.g_st0i);
+        // Primary path (§4.4) and secondary path through the medium down and up (§5.5).
+        let g_t0j = hg::refract(g_t0i, 1.0 / eta) * f.g_t;
+        let g_t0j_r = g_t0j * g_next;
+        let g_t0j_rt = hg::refract(g_t0j_r, eta) * f.g_tp;
+        let g_st0j = hg::refract(g_st0i, 1.0 / eta) * f.g_t;
+        let g_st0j_r = g_st0j * g_medium * g_next * g_medium;
+        let g_st0j_rt = hg::refract(g_st0j_r, eta) * f.g_tp;
+        let (gt, gtp) = (safe_ratio(g_t0j, g_t0i), safe_ratio(g_t0j_rt, g_t0j_r));
+        let (gst, gstp) = (safe_ratio(g_st0j, g_st0i), safe_ratio(g_st0j_rt, g_st0j_r));
+        let (mut r, mut t, mut rp, mut tp) = (f.r, 1.0 - f.r, f.r, 1.0 - f.r);
+        let (mut rs, mut ts, mut rsp, mut tsp) = (r, t, rp, tp);
+        if eta < 1.0 {
+            let tau = tir.tir(f.mu, hg::alpha_of_g(g_t0i), eta) * t;
+            r += tau;
+            t -= tau;
+            let tau = tir.tir(f.mu, hg::alpha_of_g(g_st0i), eta) * ts;
+            rs += tau;
+            ts -= tau;
+        } else {
+            let tau = tir.tir(f.mu_t, hg::alpha_of_g(g_t0j_r), 1.0 / eta) * tp;
+            rp += tau;
+            tp -= tau;
+            let tau = tir.tir(f.mu_t, hg::alpha_of_g(g_st0j_r), 1.0 / eta) * tsp;
+            rsp += tau;
+            tsp -= tau;
+        }
+        let energy = Component6::interface(
+            Component::lossless(r, t, rp, tp),
+            Component::lossless(rs, ts, rsp, tsp),
+        );
+        let asym = Component6::interface(
+            Component::weighted(r * f.g_r, t * gt, rp * f.g_r, tp * gtp),
+            Component::weighted(rs * f.g_r, ts * gst, rsp * f.g_r, tsp * gstp),
+        );
+        self.g_t0i = g_t0j;
+        self.g_st0i = g_st0j;
+        self.cos_i = f.mu_t;
+        self.eta_above = avg(layer.ior);
+        Step::Interface(energy, asym)
+    }
+
+    /// The medium filling `layer`, crossed along the mean direction (nothing at depth 0).
+    fn medium(&self, layer: &LayerParams) -> Step {
+        if layer.depth <= 0.0 {
+            return Step::Nothing;
+        }
+        let m = medium_factors(layer, self.cos_i);
+        let gr = map3(|c| m.r_fb[c] * m.g_rfb);
+        let gt = map3(|c| m.t_ff[c] * m.g_tff);
+        Step::Medium(
+            Component6::medium(m.t, m.r_fb, m.t_ff),
+            Component6::medium_weighted(m.t, m.r_fb, m.t_ff, gr, gt),
+        )
+    }
+
+    /// Adds `step` below the slabs and emits the lobes the flags allow.
+    fn add(&mut self, step: Step) {
+        let (up, up_g) = match step {
+            Step::Substrate { r_c, g_r } => {
+                self.primary = true;
+                self.transmittance = [0.0; 3];
+                let up = self.e.over_base(r_c);
+                let up_g = self.g.over_base(map3(|c| r_c[c] * g_r));
+                let up_g = std::array::from_fn(|k| map3(|c| bound(up_g[k][c], up[k][c])));
+                (up, up_g)
+            }
+            Step::Interface(energy, asym) | Step::Medium(energy, asym) => {
+                // Request flags (§5.7): primary after the first interface, backward after the
+                // first medium, forward once both exist.
+                if matches!(step, Step::Interface(..)) {
+                    self.primary = true;
+                } else {
+                    self.backward = true;
+                }
+                self.e = self.e.over(&energy);
+                self.g = self.g.over(&asym).bounded_by(&self.e);
+                self.transmittance = self.down();
+                (self.e.up, self.g.up)
+            }
+            Step::Nothing => {
+                self.transmittance = self.down();
+                (self.e.up, self.g.up)
+            }
+        };
+        self.emit(up, up_g);
+    }
+
+    /// The energy transmitted down to the current component, over every flux class.
+    fn down(&self) -> Rgb {
+        let e = &self.e;
+        map3(|c| e.down[0][c] + e.down[1][c] + e.down[2][c])
+    }
+
+    /// Primary, secondary-forward and secondary-backward lobes, as the flags allow (§5.7):
+    /// each the increment of its class's upward flux.
+    fn emit(&mut self, up: [Rgb; 3], up_g: [Rgb; 3]) {
+        let emit = [self.primary, self.primary && self.backward, self.backward];
+        for k in 0..3 {
+            if emit[k] {
+                if k == 2 && self.lobes.len() < 32 {
+                    self.retro_mask |= 1 << self.lobes.len();
+                }
+                let (prev, prev_g) = (self.prev[k], self.prev_g[k]);
+                let g_lobe = avg(map3(|c| {
+                    safe_ratio(up_g[k][c] - prev_g[c], up[k][c] - prev[c])
+                }));
+                self.lobes.push(Lobe {
+                    weight: map3(|c| (up[k][c] - prev[c]).max(0.0)),
+                    roughness: hg::alpha_of_g(g_lobe.min(1.0)),
+                    diffuse: false,
+                });
+            }
+            self.prev[k] = up[k];
+            self.prev_g[k] = up_g[k];
+        }
+    }
+
+    fn finish(self) -> Evaluation {
+        let prev = self.prev;
+        Evaluation {
+            reflectance: map3(|c| prev[0][c] + prev[1][c] + prev[2][c]),
+            transmittance: self.transmittance,
+            lobes: self.lobes,
+            retro_mask: self.retro_mask,
+        }
     }
 }
 
@@ -270,13 +278,7 @@ mod tests {
         sigma_a: f64,
         g: f64,
     ) -> LayerParams {
-        LayerParams {
-            depth,
-            sigma_s: [sigma_s; 3],
-            sigma_a: [sigma_a; 3],
-            g,
-            ..coat(ior, roughness)
-        }
+        coat(ior, roughness).with_medium(depth, [sigma_s; 3], [sigma_a; 3], g)
     }
 
     #[test]

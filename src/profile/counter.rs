@@ -11,7 +11,7 @@
 //!
 //! A draw's count carries costs that do not grow with the pixels it shades: vertex shading,
 //! triangle setup, the blocks a triangle edge crosses. The worker therefore draws every case at
-//! two sizes ([`CounterSizes`]), and [`add_counts`] divides the difference of the two counts by
+//! two sizes ([`CounterSizes`]), and [`count_plans`] divides the difference of the two counts by
 //! the difference of the shaded pixels: instructions per additional shaded pixel, in which the
 //! fixed costs cancel (profiling/README.md).
 
@@ -26,16 +26,16 @@ use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
 use crate::material::Stack;
-use crate::render::forward::ForwardPass;
 use crate::render::lights::Lighting;
 use crate::render::scene::{Camera, Scene};
-use crate::render::surface::spec_bits;
-use crate::render::{Renderer, ShadedPhase};
+use crate::render::{PassCache, Renderer, ShadedPhase};
 use crate::size::Size;
 use crate::tables::environment::EnvDesc;
 
-use super::bench::{place_scene, Case, CounterInfo, Results};
+use super::bench::place_scene;
 use super::callgrind;
+use super::plan::{Case, Plan};
+use super::results::{CaseCounts, CounterInfo, Counts};
 
 /// The environment the worker prefilters: small, because the worker runs under valgrind and
 /// the prefilter is not what is counted. The shaded draw's code path does not depend on the
@@ -139,29 +139,21 @@ pub fn worker(
     }
     let mut renderer = Renderer::new(gpu, equirect, WORKER_ENV)?;
     renderer.lighting = lighting.clone();
-    let mut passes: Vec<ForwardPass> = Vec::new();
-    for case in cases {
-        let layers = case.stack.params();
-        let surface = case.stack.surface.as_ref();
-        if !passes
-            .iter()
-            .any(|p| p.shades(case.variant, &layers, spec_bits(surface)))
-        {
-            renderer.set_surface(surface)?;
-            passes.push(renderer.prepare(case.variant, &layers)?);
-        }
+    let keys = cases
+        .iter()
+        .map(|c| c.pass_key(lighting))
+        .collect::<Result<Vec<_>>>()?;
+    let mut passes = PassCache::new();
+    for key in &keys {
+        passes.get(&mut renderer, key)?;
     }
     let total = cases.len() * sizes.len();
     for (k, &Size { width, height }) in sizes.iter().enumerate() {
         place_scene(&mut renderer, scene, width, height)?;
         for (i, case) in cases.iter().enumerate() {
             let layers = case.stack.params();
-            let surface = case.stack.surface.as_ref();
-            let pass = passes
-                .iter()
-                .find(|p| p.shades(case.variant, &layers, spec_bits(surface)))
-                .expect("prepared above");
-            renderer.set_surface(surface)?;
+            renderer.set_surface(case.stack.surface.as_ref())?;
+            let pass = passes.get(&mut renderer, &keys[i])?;
             // llvmpipe compiles a fragment-shader variant at its first draw with a state (the
             // pipeline, the bound textures' formats and sizes): keep that out with a draw of
             // the same state, as small as any — its size is not part of the variant.
@@ -215,47 +207,20 @@ impl CounterSetup {
     }
 }
 
-/// Counts the instructions of each case's shaded draw at both `sizes` and stores them in
-/// `results`, whose runs are `cases` in order (a bench run of [`BenchConfig::with_baselines`]),
-/// with `results.scene`'s mesh: the whole-draw counts at each size, the JIT instructions per
+/// Counts the instructions of every case of `plans` at both `sizes`, in one pool of workers
+/// (a suite's studies: each worker starts once and compiles each shader once), with `scene`'s
+/// mesh under `lighting`: where the counts were taken, and per plan one [`CaseCounts`] per
+/// case, in plan order — the whole-draw counts at each size and the JIT instructions per
 /// shaded pixel (the difference of the two counts over the difference of the pixels the scene
-/// shades, [`Scene::shaded_pixels`]) and their ratio to the `ggx` baseline of the same material.
-///
-/// [`BenchConfig::with_baselines`]: super::bench::BenchConfig::with_baselines
-pub fn add_counts(
-    results: &mut Results,
+/// shades, [`Scene::shaded_pixels`]).
+pub fn count_plans(
+    plans: &[&Plan],
     setup: &CounterSetup,
-    cases: &[Case],
+    scene: Scene,
+    lighting: &Lighting,
     sizes: CounterSizes,
     progress: impl FnMut(usize, usize),
-) -> Result<()> {
-    add_counts_to_all(&mut [(results, cases)], setup, sizes, progress)
-}
-
-/// [`add_counts`] for several result sets at once, in one pool of workers (a suite's studies:
-/// each worker starts once and compiles each shader once). Every set must have the same scene
-/// and lighting.
-pub fn add_counts_to_all(
-    batches: &mut [(&mut Results, &[Case])],
-    setup: &CounterSetup,
-    sizes: CounterSizes,
-    progress: impl FnMut(usize, usize),
-) -> Result<()> {
-    let Some(scene) = batches.first().map(|(r, _)| r.scene) else {
-        return Ok(());
-    };
-    if let Some((other, _)) = batches.iter().find(|(r, _)| r.scene != scene) {
-        return Err(Error::Unsupported(format!(
-            "one count covers one scene; got {scene} and {}",
-            other.scene
-        )));
-    }
-    let lighting = batches[0].0.lighting.clone();
-    if batches.iter().any(|(r, _)| r.lighting != lighting) {
-        return Err(Error::Unsupported(
-            "one count covers one lighting; the result sets were drawn under different ones".into(),
-        ));
-    }
+) -> Result<(CounterInfo, Vec<Vec<CaseCounts>>)> {
     // The renderers of the bench and of the worker look through the default camera.
     let camera = Camera::default();
     let shaded_pixels = sizes
@@ -269,10 +234,11 @@ pub fn add_counts_to_all(
             sizes.small, sizes.large
         )));
     }
-    let cases: Vec<Case> = batches
+    let cases: Vec<Case> = plans
         .iter()
-        .flat_map(|(_, cases)| cases.iter().cloned())
+        .flat_map(|plan| plan.cases().iter().cloned())
         .collect();
+    let lighting_text = (*lighting != Lighting::default()).then(|| lighting.to_toml());
     let counts = count_instructions(
         &CountRequest {
             exe: &setup.exe,
@@ -280,35 +246,31 @@ pub fn add_counts_to_all(
             env_map: &setup.env_map,
             cases: &cases,
             scene,
-            lighting: lighting.as_deref(),
+            lighting: lighting_text.as_deref(),
             sizes: &sizes.both(),
         },
         progress,
     )?;
     let added_pixels = (large_pixels - small_pixels) as f64;
-    let mut counts = counts.into_iter();
-    for (results, cases) in batches.iter_mut() {
-        for (run, count) in results
-            .runs
-            .iter_mut()
-            .zip(counts.by_ref().take(cases.len()))
-        {
-            let [small, large] = count[..] else {
-                unreachable!("count_instructions answers one count per size");
-            };
-            run.instructions = Some(small.jit);
-            run.instructions_total = Some(small.total);
-            run.instructions_large = Some(large.jit);
-            run.instructions_total_large = Some(large.total);
-            run.instructions_per_pixel = Some((large.jit as f64 - small.jit as f64) / added_pixels);
+    let mut counts = counts.into_iter().map(|count| {
+        let [small, large] = count[..] else {
+            unreachable!("count_instructions answers one count per size");
+        };
+        CaseCounts {
+            small,
+            large,
+            per_pixel: (large.jit as f64 - small.jit as f64) / added_pixels,
         }
-        results.counter = Some(CounterInfo {
-            sizes: sizes.both().map(|s| [s.width, s.height]),
-            shaded_pixels,
-        });
-        results.set_per_pixel_ratios();
-    }
-    Ok(())
+    });
+    let per_plan = plans
+        .iter()
+        .map(|plan| counts.by_ref().take(plan.cases().len()).collect())
+        .collect();
+    let info = CounterInfo {
+        sizes: sizes.both().map(|s| [s.width, s.height]),
+        shaded_pixels,
+    };
+    Ok((info, per_plan))
 }
 
 /// What the parent needs to start the worker.
@@ -320,7 +282,7 @@ pub struct CountRequest<'a> {
     pub env_map: &'a Path,
     pub cases: &'a [Case],
     pub scene: Scene,
-    /// The lighting file's text (`Results::lighting`); `None`: the environment alone.
+    /// The lighting file's text (`Lighting::to_toml`); `None`: the environment alone.
     pub lighting: Option<&'a str>,
     /// The resolutions each case is drawn and counted at, in order.
     pub sizes: &'a [Size],
@@ -569,16 +531,6 @@ fn io_error(path: &Path, e: std::io::Error) -> Error {
         path: path.to_owned(),
         message: e.to_string(),
     }
-}
-
-/// What one counted draw executed, split by where the code lives.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Counts {
-    /// Everything: the driver's work for the draw included.
-    pub total: u64,
-    /// Only llvmpipe's JIT-compiled code (shaders, triangle setup): code in anonymous
-    /// mappings, which callgrind names `???`. Deterministic for a given shader and coverage.
-    pub jit: u64,
 }
 
 /// The case and size indices and the counts of one callgrind dump, when it is one of ours.

@@ -4,21 +4,21 @@
 //! tests use) between the two images tone-mapped as `lamina render` writes its PNGs, at FLIP's
 //! default 67 pixels per degree. The FLIP error map (magma) is what a reader looks at.
 
-use serde::{Deserialize, Serialize};
+use std::sync::atomic::AtomicBool;
 
-use crate::imageio::tonemap;
+use crate::error::Result;
+use crate::gpu::Gpu;
+use crate::imageio::{tonemap, HdrImage};
+use crate::render::reference::{self, Convergence, ReferenceImage};
+use crate::render::{PassCache, Renderer, TargetFormat};
+use crate::tables::environment::EnvDesc;
+use crate::variant::VariantKey;
 
-/// A variant's image against the reference.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
-pub struct ImageError {
-    /// Mean FLIP over the pixels (0: identical to the eye, 1: as different as can be).
-    pub flip: f64,
-    /// Root mean square of the linear radiance's difference, over pixels and RGB.
-    pub rmse: f64,
-    /// The largest |test − reference| / reference over the pixels (mean of RGB), references
-    /// below 1 % of the image's mean radiance counting as that.
-    pub max_relative: f64,
-}
+use super::bench::{place_scene, BenchConfig};
+use super::results::{CaseImageError, ImageError};
+
+/// The error maps of a run's cases, by case index ([`error_map_path`]).
+pub type ErrorMaps = Vec<(usize, ErrorMap)>;
 
 /// An error map: RGB8 rows top to bottom.
 pub struct ErrorMap {
@@ -84,34 +84,28 @@ pub fn compare(
 }
 
 /// Renders each uniform material's reference image (`config`'s scene, size and lighting, `spp`
-/// samples per lobe) and one frame of each of `cases` (the runs of `results`, in order), in
-/// float targets, and records each run's image error and, for a half-precision run, its error
-/// against its single-precision twin, in `results`. Returns the error maps by run
-/// ([`error_map_path`]). Runs of a stack that varies over the surface get none (the reference
-/// renders uniform stacks).
+/// samples per lobe) and one frame of each case of `config`'s plan, in float targets, and
+/// measures each case's image error and, for a half-precision case, its error against its
+/// single-precision twin: one [`CaseImageError`] per case, in plan order, and the error maps
+/// by case ([`error_map_path`]). Cases of a stack that varies over the surface get none (the
+/// reference renders uniform stacks).
 pub fn measure(
-    gpu: &crate::gpu::Gpu,
-    equirect: &crate::imageio::HdrImage,
-    config: &super::bench::BenchConfig,
-    cases: &[super::bench::Case],
+    gpu: &Gpu,
+    equirect: &HdrImage,
+    config: &BenchConfig,
     spp: u32,
-    results: &mut super::bench::Results,
     progress: &mut impl FnMut(&str, usize, usize),
-) -> crate::error::Result<Vec<(usize, ErrorMap)>> {
-    use crate::render::reference::{self, Convergence, ReferenceImage};
-    use crate::render::{Renderer, TargetFormat};
-    use crate::variant::VariantKey;
+) -> Result<(Vec<CaseImageError>, ErrorMaps)> {
+    let cases = config.plan.cases();
     let (width, height) = (config.width, config.height);
-    let mut renderer = Renderer::with_target(
-        gpu,
-        equirect,
-        crate::tables::environment::EnvDesc::default(),
-        TargetFormat::Float,
-    )?;
+    let mut renderer =
+        Renderer::with_target(gpu, equirect, EnvDesc::default(), TargetFormat::Float)?;
     renderer.lighting = config.lighting.clone();
-    super::bench::place_scene(&mut renderer, config.scene, width, height)?;
-    let never = std::sync::atomic::AtomicBool::new(false);
+    place_scene(&mut renderer, config.scene, width, height)?;
+    let never = AtomicBool::new(false);
     let mut references: Vec<(String, ReferenceImage)> = Vec::new();
+    let mut passes = PassCache::new();
+    let mut errors = vec![CaseImageError::default(); cases.len()];
     let mut maps = Vec::new();
     let mut frames: Vec<Option<Vec<[f32; 4]>>> = vec![None; cases.len()];
     for (i, case) in cases.iter().enumerate() {
@@ -138,11 +132,11 @@ pub fn measure(
             .iter()
             .find(|(name, _)| *name == case.stack.name)
             .expect("rendered above");
-        let pass = renderer.prepare(case.variant, &layers)?;
-        let frame = renderer.render(&pass, &layers, width, height)?;
+        let pass = passes.get(&mut renderer, &case.pass_key(&config.lighting)?)?;
+        let frame = renderer.render(pass, &layers, width, height)?;
         let (error, map) = compare(&frame.pixels, &image.pixels, width, height);
-        results.runs[i].image_error = Some(error);
-        results.runs[i].reference_noise = Some(image.noise);
+        errors[i].error = Some(error);
+        errors[i].reference_noise = Some(image.noise);
         maps.push((i, map));
         frames[i] = Some(frame.pixels);
     }
@@ -161,12 +155,12 @@ pub fn measure(
         };
         if let (Some(test), Some(fp32)) = (&frames[i], &frames[j]) {
             let (error, map) = compare(test, fp32, width, height);
-            results.runs[i].image_error_vs_fp32 = Some(error);
+            errors[i].vs_fp32 = Some(error);
             maps.push((i + FP32_MAPS, map));
         }
     }
     progress("image error", cases.len(), cases.len());
-    Ok(maps)
+    Ok((errors, maps))
 }
 
 /// Offset of the run index under which a half-precision run's error map against its fp32

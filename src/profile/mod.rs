@@ -1,13 +1,12 @@
-//! Measuring variants: the bench runner, sweeps over variant axes, instruction counters, charts
-//! and the report.
+//! Measuring one set of cases: the plan of a run, the bench (timings), the image errors
+//! against the reference, the instruction counts under callgrind (and the table prebuild that
+//! keeps a pinned run fast), and the results schema they fill. Nothing here knows the studies
+//! and documents built on these measurements (`crate::study`).
 
 pub mod bench;
 pub mod callgrind;
-pub mod chart;
 pub mod counter;
-pub mod diff;
 pub mod image_error;
+pub mod plan;
 pub mod prebuild;
-pub mod report;
-pub mod stats;
-pub mod sweep;
+pub mod results;

@@ -3,7 +3,7 @@
 //! builds, a cold run's largest cost after the counting (the FGD study's 64⁴ grid: about
 //! 100 s) — on one core. The tables a run's variants sample are built first by
 //! `lamina table-worker`, a child process with lavapipe's default thread count (one per core),
-//! into the disk cache (`tables::cache`) that the run then reads.
+//! into the disk cache (`cache`) that the run then reads.
 
 use std::path::Path;
 use std::process::Command;
@@ -21,7 +21,7 @@ pub fn worthwhile(gpu: &Gpu) -> bool {
     let threads = std::env::var("LP_NUM_THREADS")
         .ok()
         .and_then(|v| v.trim().parse::<usize>().ok());
-    cpu && threads.is_some_and(|t| t.max(1) < cores) && crate::tables::cache::dir().is_some()
+    cpu && threads.is_some_and(|t| t.max(1) < cores) && crate::cache::tables_dir().is_some()
 }
 
 /// One variant per set of tables among `variants`: the FGD table, the G2 form and the TIR

@@ -23,8 +23,8 @@ use crate::model::fgd::ExactFgd;
 use crate::model::light::{
     for_each_lobe_direction, lobe_albedo, lobe_view, unnormalised_lobe, LobeKind, MIN_ALPHA,
 };
+use crate::model::oracle::evaluate_model;
 use crate::model::{tir, Evaluation, LayerParams, NoTir, Tir};
-use crate::oracle::evaluate_model;
 use crate::variant::{Model, Ndf, VariantKey};
 
 /// Grid side of each lobe's quadrature for the model's slice.

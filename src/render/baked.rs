@@ -23,7 +23,7 @@ use crate::variant::{Mode, VariantKey, MAX_LAYERS_LIMIT};
 use crate::vk::{upload_image, Format, Image, ImageDesc, ImageState, ImageView};
 
 use super::eval::GpuEvaluator;
-use super::{Renderer, TargetFormat};
+use super::{PassKey, Renderer, TargetFormat};
 
 /// Samples per lobe of a baked table unless asked otherwise: the smallest size of the error
 /// study ([`STUDY_SIZES`]) whose largest lobe and image errors over the presets are both
@@ -269,17 +269,21 @@ pub fn error_study(
         mode: Mode::Generic,
         ..evaluator.variant
     };
-    let reference_pass = renderer.prepare(generic, layers)?;
+    let reference_pass = renderer.prepare_uniform(generic, layers)?;
     let reference = renderer.render(&reference_pass, layers, image_size, image_size)?;
-    let baked_variant = VariantKey {
-        mode: Mode::Baked,
-        ..variant
-    };
+    let baked_key = PassKey::uniform(
+        VariantKey {
+            mode: Mode::Baked,
+            ..variant
+        },
+        layers,
+        &renderer.lighting,
+    )?;
     sizes
         .iter()
         .map(|&size| {
             let table = BakedTable::build(&evaluator, layers, size)?;
-            let pass = renderer.prepare_baked(baked_variant, layers, size)?;
+            let pass = renderer.prepare_baked(&baked_key, size)?;
             let frame = renderer.render(&pass, layers, image_size, image_size)?;
             let image_error = reference
                 .pixels

@@ -7,7 +7,6 @@ use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::{Evaluation, LayerParams, Lobe};
 use crate::shader::interface::material_buffer;
 use crate::shader::kernel::{KernelInterface, LOCAL_SIZE_1D};
-use crate::shader::specialize::{check_generic_fit, shade_spec};
 use crate::tables::fgd::FgdLookup;
 use crate::variant::{Mode, Model, ShadeSpec, VariantKey};
 use crate::vk::{
@@ -16,6 +15,8 @@ use crate::vk::{
 };
 
 use super::inputs::ShadingInputs;
+use super::lights::Lighting;
+use super::pass::PassKey;
 
 /// How far the GPU evaluation may lie from the f64 model run with the same tables (the tables'
 /// CPU twins: `tables::fgd::FgdLookup`, `tables::tir::provider`), as absolute differences of
@@ -176,10 +177,7 @@ impl<'g> GpuEvaluator<'g> {
         } else {
             self.variant.max_layers as usize
         };
-        match self.variant.model {
-            Model::Tm6 => 6 * n - 2,
-            _ => n,
-        }
+        crate::model::max_lobes(self.variant.model, n)
     }
 
     /// Evaluates `layers` (top first) at each view cosine.
@@ -224,17 +222,17 @@ impl<'g> GpuEvaluator<'g> {
         samples: &[[f32; 4]],
         light: Option<f64>,
     ) -> Result<Vec<GpuEvaluation>> {
+        // The kernel's constants come from the pass key of the stack, as a forward pass's do
+        // (no lights: the kernel takes its light per sample).
+        let key = PassKey::uniform(self.variant, layers, &Lighting::default())?;
         let specialized;
         let kernel = match &self.kernel {
             Some(kernel) => {
-                check_generic_fit(self.variant, layers)?;
-                if crate::model::ends_diffuse(layers) {
+                key.admits(layers)?;
+                if key.diffuse {
                     if self.diffuse_kernel.get().is_none() {
-                        let spec = ShadeSpec {
-                            diffuse_base: 1,
-                            ..self.variant.spec()
-                        };
-                        let built = Self::kernel(self.gpu, &self.inputs, self.variant, spec)?;
+                        let built =
+                            Self::kernel(self.gpu, &self.inputs, self.variant, key.spec(None))?;
                         let _ = self.diffuse_kernel.set(built);
                     }
                     self.diffuse_kernel.get().expect("set above")
@@ -243,9 +241,7 @@ impl<'g> GpuEvaluator<'g> {
                 }
             }
             None => {
-                let spec = shade_spec(self.variant, layers, None)
-                    .map_err(|e| Error::Unsupported(format!("variant {}: {e}", self.variant)))?;
-                specialized = Self::kernel(self.gpu, &self.inputs, self.variant, spec)?;
+                specialized = Self::kernel(self.gpu, &self.inputs, self.variant, key.spec(None))?;
                 &specialized
             }
         };

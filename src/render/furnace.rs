@@ -10,9 +10,9 @@ use glam::Vec3;
 use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
+use crate::model::oracle;
 use crate::model::LayerParams;
-use crate::oracle;
-use crate::profile::stats::MinMeanMax;
+use crate::stats::MinMeanMax;
 use crate::tables::environment::EnvDesc;
 use crate::variant::{Model, VariantKey};
 
@@ -54,7 +54,7 @@ pub fn gpu(
         samples: 16,
     };
     let mut renderer = Renderer::new(gpu, &white, desc)?;
-    let pass = renderer.prepare(variant, layers)?;
+    let pass = renderer.prepare_uniform(variant, layers)?;
     let frame = renderer.render(&pass, layers, size, size)?;
 
     let camera = renderer.camera;

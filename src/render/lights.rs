@@ -21,6 +21,7 @@ use std::path::{Path, PathBuf};
 use toml::{Table, Value};
 
 use crate::error::{Error, Result};
+use crate::shader::interface::LightGpu;
 
 /// Most lights a scene holds (the light buffer's size is the scene's own; this bounds the
 /// per-pixel loop a user can ask for).
@@ -368,6 +369,38 @@ fn read_light(table: &Table) -> std::result::Result<Light, String> {
         color,
         intensity,
     })
+}
+
+/// The `Lights` block of `bindings/scene.glsl`: a `uvec4` header (x: count) and the lights,
+/// as bytes. One zeroed light follows an empty list, so the buffer is never smaller than the
+/// block's declared minimum.
+pub fn lights_block(lights: &[Light]) -> Vec<u8> {
+    let mut bytes = bytemuck::bytes_of(&[lights.len() as u32, 0, 0, 0]).to_vec();
+    let packed: Vec<LightGpu> = lights
+        .iter()
+        .map(|light| {
+            let c = light.color.map(|c| (c * light.intensity) as f32);
+            let (position, radius) = match light.kind {
+                LightKind::Directional {
+                    direction,
+                    angular_radius,
+                } => (direction.map(|d| d as f32), angular_radius as f32),
+                LightKind::Point { position } => (position.map(|p| p as f32), 0.0),
+            };
+            let w = if matches!(light.kind, LightKind::Point { .. }) {
+                1.0
+            } else {
+                0.0
+            };
+            LightGpu {
+                position: [position[0], position[1], position[2], w],
+                radiance: [c[0], c[1], c[2], radius],
+            }
+        })
+        .chain(lights.is_empty().then(LightGpu::default))
+        .collect();
+    bytes.extend_from_slice(bytemuck::cast_slice(&packed));
+    bytes
 }
 
 #[cfg(test)]

@@ -1,4 +1,5 @@
-//! Passes and the frame that runs them: the sky, the shaded sphere, readback.
+//! Passes and the frame that runs them: the sky, the shaded sphere, readback; one key per
+//! pass and one cache of them ([`pass`]).
 
 pub mod baked;
 pub mod eval;
@@ -6,6 +7,8 @@ pub mod forward;
 pub mod furnace;
 pub mod inputs;
 pub mod lights;
+pub mod oracle;
+pub mod pass;
 pub mod reference;
 pub mod renderer;
 pub mod scene;
@@ -13,4 +16,5 @@ pub mod sheet;
 pub mod sky;
 pub mod surface;
 
+pub use pass::{PassCache, PassKey};
 pub use renderer::{RenderedFrame, Renderer, ShadedPhase, TargetFormat};

@@ -6,15 +6,16 @@
 
 use half::f16;
 
-use crate::error::Error;
-use crate::error::Result;
+use std::sync::Arc;
+
+use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
+use crate::material::Surface;
 use crate::model::LayerParams;
 use crate::shader::interface::{
-    lights_block, material_buffer, FrameConstants, SCENE_BINDINGS, SCENE_SET, SHADING_SET,
+    material_buffer, FrameConstants, SCENE_BINDINGS, SCENE_SET, SHADING_SET,
 };
-use crate::shader::specialize::{shade_spec, SpecializeError};
 use crate::tables::environment::{EnvDesc, Environment};
 use crate::variant::{Mode, Model, VariantKey};
 use crate::vk::{
@@ -23,15 +24,14 @@ use crate::vk::{
     Resource, Sampler, SamplerDesc, ScopeTiming, Stages,
 };
 
-use super::baked::{self, BakedTable};
-use super::forward::{ForwardPass, PassMaterial};
+use super::baked::{self, BakedTable, BakedTexture};
+use super::forward::ForwardPass;
 use super::inputs::ShadingInputs;
-use super::lights::Lighting;
+use super::lights::{lights_block, Lighting};
+use super::pass::PassKey;
 use super::scene::{uv_sphere, Camera, Mesh};
 use super::sky::SkyPass;
 use super::surface::SurfaceTexture;
-use crate::material::Surface;
-use std::sync::Arc;
 
 /// The render target's format: linear HDR RGBA.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -90,7 +90,7 @@ pub struct Renderer<'g> {
     /// The frame's index, which seeds a reference pass's samples (`render::reference`).
     pub frame_index: u32,
     /// The maps of every spatially varying stack set so far ([`Renderer::set_surface`]), and
-    /// the one passes are prepared and frames rendered for (`None`: uniform stacks).
+    /// the one frames are rendered with (`None`: uniform stacks).
     surfaces: Vec<SurfaceTexture>,
     current_surface: Option<usize>,
 }
@@ -194,9 +194,9 @@ impl<'g> Renderer<'g> {
         Ok(())
     }
 
-    /// Sets the spatial variation of the stacks that later passes and frames shade: a
-    /// stack's [`crate::material::Stack::surface`] (its maps are uploaded once per surface),
-    /// or `None` for uniform stacks. A pass prepared for one kind renders only that kind.
+    /// Sets the spatial variation of the stacks that later frames shade: a stack's
+    /// [`crate::material::Stack::surface`] (its maps are uploaded once per surface), or `None`
+    /// for uniform stacks. A frame renders with a pass whose key was made with the same kind.
     pub fn set_surface(&mut self, surface: Option<&Arc<Surface>>) -> Result<()> {
         self.current_surface = match surface {
             None => None,
@@ -216,69 +216,39 @@ impl<'g> Renderer<'g> {
         self.current_surface.map(|i| &self.surfaces[i])
     }
 
-    /// Compiles and builds the pipeline of `variant` (and the tables it samples) for the
-    /// stack `layers` (top first): under `mode=generic` the pass shades any stack that fits;
-    /// under the other modes it is built for this one (its structure, its values, or its baked
-    /// lobes, `render::baked`, at [`baked::DEFAULT_SIZE`] samples).
-    pub fn prepare(&mut self, variant: VariantKey, layers: &[LayerParams]) -> Result<ForwardPass> {
-        self.prepare_baked(variant, layers, baked::DEFAULT_SIZE)
+    /// Compiles and builds the pipeline of `key` (and the tables it samples): under
+    /// `mode=generic` the pass shades any stack that fits; under the other modes it is built
+    /// for the key's stack (its structure, its values, or its baked lobes, `render::baked`, at
+    /// [`baked::DEFAULT_SIZE`] samples).
+    pub fn prepare(&mut self, key: &PassKey) -> Result<ForwardPass> {
+        self.prepare_baked(key, baked::DEFAULT_SIZE)
     }
 
-    /// [`Renderer::prepare`] with a baked table of `baked_size` samples per lobe.
-    pub fn prepare_baked(
+    /// [`Renderer::prepare`] for the uniform stack `layers` in `variant`, under the renderer's
+    /// lighting.
+    pub fn prepare_uniform(
         &mut self,
         variant: VariantKey,
         layers: &[LayerParams],
-        baked_size: u32,
     ) -> Result<ForwardPass> {
+        let key = PassKey::uniform(variant, layers, &self.lighting)?;
+        self.prepare(&key)
+    }
+
+    /// [`Renderer::prepare`] with a baked table of `baked_size` samples per lobe.
+    pub fn prepare_baked(&mut self, key: &PassKey, baked_size: u32) -> Result<ForwardPass> {
+        let variant = key.variant;
         self.inputs.prepare(variant)?;
-        let specialize = |e: SpecializeError| Error::Unsupported(format!("variant {variant}: {e}"));
-        if variant.model == Model::Ggx && variant.mode.per_material() {
-            return Err(Error::Unsupported(format!(
-                "variant {variant}: model=ggx is the generic baseline; it has no per-material \
-                 mode (use mode=generic)"
-            )));
-        }
-        if self.current_surface.is_some() && variant.mode.per_material() {
-            return Err(Error::Unsupported(format!(
-                "variant {variant}: this stack varies over the surface (textures, patterns or \
-                 coverage); it shades under mode=generic only, which reads its maps per pixel"
-            )));
-        }
-        if !variant.mode.per_material() {
-            let mut spec = shade_spec(variant, layers, None).map_err(specialize)?;
-            spec.surface_maps = self
-                .surface_texture()
-                .map_or(0, |t| t.surface.maps.spec_bits());
-            spec.diffuse_base = u32::from(crate::model::ends_diffuse(layers));
-            spec.lights = u32::from(!self.lighting.lights.is_empty());
-            let format = self.target.format();
-            let pass = ForwardPass::new(self.gpu, &self.layout, format, variant, &spec, None)?;
-            return Ok(pass);
-        }
-        let baked = if variant.mode == Mode::Baked {
-            let evaluator = baked::evaluator_for(self.gpu, variant, layers.len())?;
-            let table = BakedTable::build(&evaluator, layers, baked_size)?;
-            let texture = table.upload(self.gpu, "baked lobes")?;
-            Some((table, texture))
-        } else {
-            None
+        let baked = match (variant.mode, key.layers()) {
+            (Mode::Baked, Some(layers)) => {
+                let evaluator = baked::evaluator_for(self.gpu, variant, layers.len())?;
+                let table = BakedTable::build(&evaluator, layers, baked_size)?;
+                let texture = table.upload(self.gpu, "baked lobes")?;
+                Some((table, texture))
+            }
+            _ => None,
         };
-        let mut spec = shade_spec(variant, layers, baked.as_ref().map(|(t, _)| t.shape))
-            .map_err(specialize)?;
-        spec.lights = u32::from(!self.lighting.lights.is_empty());
-        ForwardPass::new(
-            self.gpu,
-            &self.layout,
-            self.target.format(),
-            variant,
-            &spec,
-            Some(PassMaterial {
-                layers: layers.to_vec(),
-                baked,
-                reference: false,
-            }),
-        )
+        self.pass(key.clone(), baked)
     }
 
     /// The reference pass of the uniform stack `layers` in `model` (`render::reference`),
@@ -289,13 +259,6 @@ impl<'g> Renderer<'g> {
         layers: &[LayerParams],
         table: BakedTable,
     ) -> Result<ForwardPass> {
-        if self.current_surface.is_some() {
-            return Err(Error::Unsupported(
-                "this stack varies over the surface (textures, patterns or coverage); the \
-                 reference renders uniform stacks"
-                    .into(),
-            ));
-        }
         if self.target != TargetFormat::Float {
             return Err(Error::Unsupported(
                 "a reference pass averages frames finer than a half float: render it into a \
@@ -303,32 +266,14 @@ impl<'g> Renderer<'g> {
                     .into(),
             ));
         }
-        let variant = VariantKey {
-            model,
-            mode: Mode::Baked,
-            ..VariantKey::default()
-        };
-        self.inputs.prepare(variant)?;
-        let mut spec = variant.spec();
-        // Two rows per lobe (`render::reference::lobe_table`).
-        spec.lobe_count = table.shape.lobe_count / 2;
-        spec.retro_mask = table.shape.retro_mask;
-        spec.baked_size = table.shape.size;
-        spec.lights = u32::from(!self.lighting.lights.is_empty());
-        spec.diffuse_base = u32::from(crate::model::ends_diffuse(layers));
+        let key = PassKey::reference(model, layers, &self.lighting);
+        self.inputs.prepare(key.variant)?;
         let texture = table.upload(self.gpu, "reference lobes")?;
-        ForwardPass::new(
-            self.gpu,
-            &self.layout,
-            self.target.format(),
-            variant,
-            &spec,
-            Some(PassMaterial {
-                layers: layers.to_vec(),
-                baked: Some((table, texture)),
-                reference: true,
-            }),
-        )
+        self.pass(key, Some((table, texture)))
+    }
+
+    fn pass(&self, key: PassKey, baked: Option<(BakedTable, BakedTexture)>) -> Result<ForwardPass> {
+        ForwardPass::new(self.gpu, &self.layout, self.target.format(), key, baked)
     }
 
     /// Renders one frame of the stack `layers` (top first) with a prepared pass.
@@ -354,84 +299,9 @@ impl<'g> Renderer<'g> {
         height: u32,
         observe: &mut dyn FnMut(ShadedPhase),
     ) -> Result<RenderedFrame> {
-        pass.check_material(layers)?;
-        let bits = self
-            .surface_texture()
-            .map_or(0, |t| t.surface.maps.spec_bits());
-        match (self.surface_texture(), pass.surface != 0) {
-            (Some(s), true) if s.surface.layers.len() == layers.len() && bits == pass.surface => {}
-            (None, false) => {}
-            (Some(s), true) if s.surface.layers.len() != layers.len() => {
-                return Err(Error::Unsupported(format!(
-                    "the surface's maps are for {} layers; this stack has {}",
-                    s.surface.layers.len(),
-                    layers.len()
-                )))
-            }
-            (Some(_), true) => {
-                return Err(Error::Unsupported(
-                    "this pass was prepared for a stack whose maps vary other fields; prepare \
-                     one for this stack"
-                        .into(),
-                ))
-            }
-            (_, built_for_maps) => {
-                let kind = |maps: bool| if maps { "a varying" } else { "a uniform" };
-                return Err(Error::Unsupported(format!(
-                    "this pass was prepared for {} stack and the renderer holds {}; set the \
-                     surface before preparing",
-                    kind(built_for_maps),
-                    kind(self.current_surface.is_some())
-                )));
-            }
-        }
+        self.check_pass(pass, layers)?;
+        let sets = self.frame_sets(pass, layers, width, height)?;
         let device = &self.gpu.device;
-        let view_proj = self.camera.view_proj(width as f32 / height as f32);
-        let constants = FrameConstants {
-            view_proj: view_proj.to_cols_array_2d(),
-            inv_view_proj: view_proj.inverse().to_cols_array_2d(),
-            camera_pos: self.camera.eye.extend(1.0).to_array(),
-            params: [
-                self.environment.desc.mip_count as f32,
-                self.lighting.environment as f32,
-                self.frame_index as f32,
-                0.0,
-            ],
-            irradiance: self.environment.irradiance,
-        };
-        let uniforms = Buffer::with_data(
-            device,
-            BufferUsageFlags::UNIFORM_BUFFER,
-            &[constants],
-            "frame constants",
-        )?;
-        let lights = Buffer::with_data(
-            device,
-            BufferUsageFlags::STORAGE_BUFFER,
-            &lights_block(&self.lighting.lights),
-            "lights",
-        )?;
-        let maps = self.surface_texture().map(|t| &t.surface.maps);
-        let material = material_buffer(device, layers, maps, "material")?;
-        let baked = pass
-            .material
-            .as_ref()
-            .and_then(|m| m.baked.as_ref())
-            .map(|(_, texture)| &texture.view);
-        let shading = self.inputs.bind(
-            pass.variant,
-            &material,
-            baked,
-            self.surface_texture().map(|t| &t.view),
-            "shading",
-        )?;
-        let mut scene = DescriptorSet::new(device, &self.scene_layout, "scene")?;
-        scene
-            .write(0, Resource::Buffer(&uniforms))
-            .write(1, Resource::Sampled(&self.environment.view, &self.sampler))
-            .write(2, Resource::Buffer(&lights))
-            .write(3, Resource::Buffer(&self.environment.sampling));
-
         let format = self.target.format();
         let target = Image::new(
             device,
@@ -454,8 +324,8 @@ impl<'g> Renderer<'g> {
                 ImageState::ColorAttachment,
             );
             rec.bind_pipeline(&self.sky.pipeline);
-            rec.bind_set(&self.sky.pipeline, &self.layout, SHADING_SET, &shading);
-            rec.bind_set(&self.sky.pipeline, &self.layout, SCENE_SET, &scene);
+            rec.bind_set(&self.sky.pipeline, &self.layout, SHADING_SET, &sets.shading);
+            rec.bind_set(&self.sky.pipeline, &self.layout, SCENE_SET, &sets.scene);
             let scope = profiler
                 .begin(rec, "sky")
                 .expect("first scope of a fresh profiler");
@@ -469,8 +339,8 @@ impl<'g> Renderer<'g> {
         observe(ShadedPhase::Before);
         submit_and_wait(device, "shaded", |rec| {
             rec.bind_pipeline(&pass.pipeline);
-            rec.bind_set(&pass.pipeline, &self.layout, SHADING_SET, &shading);
-            rec.bind_set(&pass.pipeline, &self.layout, SCENE_SET, &scene);
+            rec.bind_set(&pass.pipeline, &self.layout, SHADING_SET, &sets.shading);
+            rec.bind_set(&pass.pipeline, &self.layout, SCENE_SET, &sets.scene);
             let scope = profiler
                 .begin(rec, "shaded")
                 .expect("the sky scope is closed");
@@ -516,4 +386,116 @@ impl<'g> Renderer<'g> {
             shaded,
         })
     }
+
+    /// Errs unless `pass` shades `layers` with the maps set by [`Renderer::set_surface`] and
+    /// the renderer's lighting: each of them compiled into the pass (its [`PassKey`]).
+    fn check_pass(&self, pass: &ForwardPass, layers: &[LayerParams]) -> Result<()> {
+        pass.key.admits(layers)?;
+        let key = &pass.key;
+        match (self.surface_texture(), key.surface != 0) {
+            (None, false) => {}
+            (Some(s), true) if s.surface.layers.len() != layers.len() => {
+                return Err(Error::Unsupported(format!(
+                    "the surface's maps are for {} layers; this stack has {}",
+                    s.surface.layers.len(),
+                    layers.len()
+                )))
+            }
+            (Some(s), true) if s.surface.maps.spec_bits() == key.surface => {}
+            (Some(_), true) => {
+                return Err(Error::Unsupported(
+                    "this pass was prepared for a stack whose maps vary other fields; prepare \
+                     one for this stack"
+                        .into(),
+                ))
+            }
+            (_, built_for_maps) => {
+                let kind = |maps: bool| if maps { "a varying" } else { "a uniform" };
+                return Err(Error::Unsupported(format!(
+                    "this pass was prepared for {} stack and the renderer holds {}; set the \
+                     surface that the pass's key was made with",
+                    kind(built_for_maps),
+                    kind(self.current_surface.is_some())
+                )));
+            }
+        }
+        let lit = !self.lighting.lights.is_empty();
+        if key.lights != lit {
+            let kind = |lights: bool| if lights { "with" } else { "without" };
+            return Err(Error::Unsupported(format!(
+                "this pass ({}) was prepared for a scene {} analytic lights and the renderer's \
+                 lighting is {} them; prepare one under this lighting",
+                key.variant,
+                kind(key.lights),
+                kind(lit)
+            )));
+        }
+        Ok(())
+    }
+
+    /// The frame's descriptor sets: the shading set (`layers`, the tables of `pass`'s variant,
+    /// its baked lobes, the surface's maps) and the scene set (frame constants for a
+    /// `width`×`height` target, the environment, the lights).
+    fn frame_sets(
+        &self,
+        pass: &ForwardPass,
+        layers: &[LayerParams],
+        width: u32,
+        height: u32,
+    ) -> Result<FrameSets> {
+        let device = &self.gpu.device;
+        let view_proj = self.camera.view_proj(width as f32 / height as f32);
+        let constants = FrameConstants {
+            view_proj: view_proj.to_cols_array_2d(),
+            inv_view_proj: view_proj.inverse().to_cols_array_2d(),
+            camera_pos: self.camera.eye.extend(1.0).to_array(),
+            params: [
+                self.environment.desc.mip_count as f32,
+                self.lighting.environment as f32,
+                self.frame_index as f32,
+                0.0,
+            ],
+            irradiance: self.environment.irradiance,
+        };
+        let uniforms = Buffer::with_data(
+            device,
+            BufferUsageFlags::UNIFORM_BUFFER,
+            &[constants],
+            "frame constants",
+        )?;
+        let lights = Buffer::with_data(
+            device,
+            BufferUsageFlags::STORAGE_BUFFER,
+            &lights_block(&self.lighting.lights),
+            "lights",
+        )?;
+        let maps = self.surface_texture().map(|t| &t.surface.maps);
+        let material = material_buffer(device, layers, maps, "material")?;
+        let baked = pass.baked.as_ref().map(|(_, texture)| &texture.view);
+        let shading = self.inputs.bind(
+            pass.key.variant,
+            &material,
+            baked,
+            self.surface_texture().map(|t| &t.view),
+            "shading",
+        )?;
+        let mut scene = DescriptorSet::new(device, &self.scene_layout, "scene")?;
+        scene
+            .write(0, Resource::Buffer(&uniforms))
+            .write(1, Resource::Sampled(&self.environment.view, &self.sampler))
+            .write(2, Resource::Buffer(&lights))
+            .write(3, Resource::Buffer(&self.environment.sampling));
+        Ok(FrameSets {
+            shading,
+            scene,
+            _buffers: [uniforms, lights, material],
+        })
+    }
+}
+
+/// A frame's descriptor sets and the buffers they point at (alive while the sets are used).
+struct FrameSets {
+    shading: DescriptorSet,
+    scene: DescriptorSet,
+    _buffers: [Buffer; 3],
 }

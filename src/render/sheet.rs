@@ -14,6 +14,7 @@ use crate::text::TextFont;
 use crate::variant::VariantKey;
 
 use super::lights::Lighting;
+use super::pass::{PassCache, PassKey};
 use super::renderer::Renderer;
 
 /// One row of the sheet.
@@ -143,37 +144,31 @@ pub fn render(
     let mut renderer = Renderer::new(gpu, equirect, EnvDesc::default())?;
     renderer.lighting = lighting.clone();
     // A generic column's pass shades every row; a per-material one is built per tile.
-    let first = rows.first().map(|r| r.layers.as_slice()).unwrap_or(&[]);
-    let mut passes = columns
-        .iter()
-        .map(|c| renderer.prepare(c.variant, first))
-        .collect::<Result<Vec<_>>>()?;
+    let mut passes = PassCache::new();
     let t = tile as usize;
     let width = columns.len() * (t + GAP) + GAP;
     let height = rows.len() * (t + GAP) + GAP;
     let mut sheet: Vec<u8> = [40, 40, 40, 255].repeat(width * height);
     let font = TextFont::bundled();
     for (r, row) in rows.iter().enumerate() {
-        for (c, pass) in passes.iter_mut().enumerate() {
+        for (c, column) in columns.iter().enumerate() {
             let (x0, y0) = (GAP + c * (t + GAP), GAP + r * (t + GAP));
-            let variant = columns[c].variant;
+            let variant = column.variant;
             let varies = row.surface.is_some();
-            renderer.set_surface(row.surface.as_ref())?;
             if varies && variant.mode.per_material() {
                 // A varying stack shades under mode=generic only: the tile says so.
-                let label = format!("{} · {}: varies, generic only", row.name, columns[c].label);
+                let label = format!("{} · {}: varies, generic only", row.name, column.label);
                 label_tile(&font, &mut sheet, width, (x0, y0), t, &label);
                 continue;
             }
-            let surface = super::surface::spec_bits(row.surface.as_ref());
-            if !pass.shades(variant, &row.layers, surface) {
-                *pass = renderer.prepare(variant, &row.layers)?;
-            }
+            let key = PassKey::new(variant, &row.layers, row.surface.as_deref(), lighting)?;
+            renderer.set_surface(row.surface.as_ref())?;
+            let pass = passes.get(&mut renderer, &key)?;
             let frame = renderer.render(pass, &row.layers, tile, tile)?;
             if frame.pixels.iter().flatten().any(|v| !v.is_finite()) {
                 return Err(Error::Unsupported(format!(
-                    "`{}` in {} rendered a non-finite pixel",
-                    row.name, pass.variant
+                    "`{}` in {variant} rendered a non-finite pixel",
+                    row.name
                 )));
             }
             let rgba = tonemap(&frame.pixels, exposure_ev);
@@ -181,7 +176,7 @@ pub fn render(
                 let dst = ((y0 + y) * width + x0) * 4;
                 sheet[dst..dst + t * 4].copy_from_slice(&rgba[y * t * 4..(y + 1) * t * 4]);
             }
-            let label = format!("{} · {}", row.name, columns[c].label);
+            let label = format!("{} · {}", row.name, column.label);
             label_tile(&font, &mut sheet, width, (x0, y0), t, &label);
         }
     }

@@ -177,9 +177,9 @@ fn codes_glsl() -> String {
         }
     }
     let mut out = String::from(
-        "// Written by src/shader/compiler.rs from the Rust value tables (src/variant.rs) and\n\
-         // the model's constants (model, model::hg, model::tir, model::tir_fit). Do not copy\n\
-         // these by hand.\n\
+        "// Written by src/shader/compiler.rs from the Rust value tables (src/variant.rs), the\n\
+         // model's constants (model, model::hg, model::tir, model::tir_fit) and the tables'\n\
+         // (shader::interface). Do not copy these by hand.\n\
          #ifndef LAMINA_GENERATED_CODES\n#define LAMINA_GENERATED_CODES\n",
     );
     axis::<Model>(&mut out);
@@ -189,6 +189,12 @@ fn codes_glsl() -> String {
     axis::<Ndf>(&mut out);
     axis::<Mode>(&mut out);
     for (name, value) in [
+        ("TM6_LOBES_PER_LAYER", crate::model::TM6_LOBES_PER_LAYER),
+        ("TM6_LOBES_LESS", crate::model::TM6_LOBES_LESS),
+    ] {
+        out.push_str(&format!("#define {name} {value}u\n"));
+    }
+    for (name, value) in [
         ("TM_INDEX_MATCHED", crate::model::INDEX_MATCHED),
         ("TM_REFLECTS_NOTHING", crate::model::REFLECTS_NOTHING),
         ("HG_RATIO_FLOOR", crate::model::hg::RATIO_FLOOR),
@@ -197,8 +203,12 @@ fn codes_glsl() -> String {
         ("LIGHT_MIN_ALPHA_FP16", crate::model::light::MIN_ALPHA_FP16),
         (
             "LOBE_ALBEDO_SIZE",
-            f64::from(crate::tables::lobe_albedo::SIZE),
+            f64::from(super::interface::LOBE_ALBEDO_SIZE),
         ),
+        ("FGD_ETA_MAX", super::interface::FGD_ETA_MAX),
+        ("FGD_KAPPA_MAX", super::interface::FGD_KAPPA_MAX),
+        ("BELCOUR_CT1", super::interface::BELCOUR_CT1),
+        ("BELCOUR_CT2", super::interface::BELCOUR_CT2),
         (
             "TIR_CONSTANT_FRACTION",
             crate::model::tir::CONSTANT_FRACTION,
@@ -285,7 +295,7 @@ pub struct ShaderCompiler {
 impl ShaderCompiler {
     /// A compiler with the disk cache under lamina's cache root (none when it has no root).
     pub fn new() -> Result<Self, ShaderError> {
-        Self::with_disk_cache(crate::tables::cache::root().map(|r| r.join("spirv")))
+        Self::with_disk_cache(crate::cache::root().map(|r| r.join("spirv")))
     }
 
     /// A compiler keeping its SPIR-V in `disk` too (`None`: in memory only).
@@ -403,7 +413,7 @@ impl SpirvFile {
         let (count, rest) = body.split_first_chunk::<8>()?;
         let count = usize::try_from(u64::from_le_bytes(*count)).ok()?;
         let (data, sum) = rest.split_at_checked(count.checked_mul(4)?)?;
-        if sum != crate::tables::cache::checksum(data).to_le_bytes() {
+        if sum != crate::cache::checksum(data).to_le_bytes() {
             return None;
         }
         let words: Vec<u32> = data
@@ -421,7 +431,7 @@ impl SpirvFile {
         let mut bytes = SPIRV_MAGIC.to_vec();
         bytes.extend((words.len() as u64).to_le_bytes());
         bytes.extend(&data);
-        bytes.extend(crate::tables::cache::checksum(&data).to_le_bytes());
+        bytes.extend(crate::cache::checksum(&data).to_le_bytes());
         let path = self.dir.join(&self.name);
         let written = crate::imageio::write_atomically(&path, |temp| {
             std::fs::write(temp, &bytes).map_err(|e| e.to_string())

@@ -128,6 +128,22 @@ pub const TIR_TABLE_SIZE: u32 = 64;
 /// (`tables::fgd`).
 pub const FGD_GRID_SIZE: u32 = 64;
 
+/// Texels per side of the white lobe's albedo table the lights read (`LOBE_ALBEDO_SIZE`, read
+/// by `glsl/include/lib/light.glsl`): the split-sum table's. The host builds it at this size
+/// (`tables::lobe_albedo`).
+pub const LOBE_ALBEDO_SIZE: u32 = 64;
+
+/// The 4-D FGD table's domain in η and κ: [0, 4] each (ALGORITHMS.md §6.1); beyond it,
+/// clamped. `FGD_ETA_MAX` and `FGD_KAPPA_MAX` in `glsl/include/lib/fgd.glsl`.
+pub const FGD_ETA_MAX: f64 = 4.0;
+pub const FGD_KAPPA_MAX: f64 = 4.0;
+
+/// The view cosines where the Belcour projection interpolates F exactly (ALGORITHMS.md §7.2):
+/// where b2 peaks and b3 bottoms out in the paper's basis (`tables::belcour`, and
+/// `BELCOUR_CT1`, `BELCOUR_CT2` in `glsl/include/lib/fgd.glsl`).
+pub const BELCOUR_CT1: f64 = 128.0 / 999.0;
+pub const BELCOUR_CT2: f64 = 432.0 / 999.0;
+
 /// The shading set's bindings, as `glsl/include/bindings/shading.glsl` declares them. The
 /// material is a storage buffer, not a uniform buffer: lavapipe inlines uniform-buffer values
 /// that feed loop bounds into the shader and recompiles it at draw time (Mesa's
@@ -303,36 +319,3 @@ pub struct LightGpu {
 
 const _: () = assert!(size_of::<LightGpu>() == 32);
 const _: () = assert!(offset_of!(LightGpu, radiance) == 16);
-
-/// The `Lights` block of `bindings/scene.glsl`: a `uvec4` header (x: count) and the lights,
-/// as bytes. One zeroed light follows an empty list, so the buffer is never smaller than the
-/// block's declared minimum.
-pub fn lights_block(lights: &[crate::render::lights::Light]) -> Vec<u8> {
-    use crate::render::lights::LightKind;
-    let mut bytes = bytemuck::bytes_of(&[lights.len() as u32, 0, 0, 0]).to_vec();
-    let packed: Vec<LightGpu> = lights
-        .iter()
-        .map(|light| {
-            let c = light.color.map(|c| (c * light.intensity) as f32);
-            let (position, radius) = match light.kind {
-                LightKind::Directional {
-                    direction,
-                    angular_radius,
-                } => (direction.map(|d| d as f32), angular_radius as f32),
-                LightKind::Point { position } => (position.map(|p| p as f32), 0.0),
-            };
-            let w = if matches!(light.kind, LightKind::Point { .. }) {
-                1.0
-            } else {
-                0.0
-            };
-            LightGpu {
-                position: [position[0], position[1], position[2], w],
-                radiance: [c[0], c[1], c[2], radius],
-            }
-        })
-        .chain(lights.is_empty().then(LightGpu::default))
-        .collect();
-    bytes.extend_from_slice(bytemuck::cast_slice(&packed));
-    bytes
-}

@@ -132,51 +132,78 @@ pub fn shade_spec(
     if variant.mode == Mode::Generic {
         return Ok(spec);
     }
-    let s = Structure::of(variant.model, layers).map_err(|e| match e {
-        SpecializeError::LayerCount { count, .. } => SpecializeError::LayerCount {
-            mode: variant.mode,
-            count,
-        },
-        other => other,
-    })?;
-    // The arrays have the material's own size: `max_layers` does not matter.
-    spec.max_layers = s.layer_count;
-    spec.layer_count = s.layer_count;
-    spec.smooth_mask = s.smooth_mask;
-    spec.conductor_base = u32::from(s.conductor_base);
-    spec.medium_mask = s.medium_mask;
-    spec.denser_mask = s.denser_mask;
-    spec.matched_mask = s.matched_mask;
-    spec.clear_mask = s.clear_mask;
+    Structure::for_variant(variant, layers)?.specialize(&mut spec);
     if variant.mode == Mode::SpecializedValues {
-        for (dst, l) in spec.values.iter_mut().zip(layers) {
-            let f = |v: f64| v as f32;
-            *dst = [
-                f(l.ior[0]),
-                f(l.ior[1]),
-                f(l.ior[2]),
-                f(l.kappa[0]),
-                f(l.kappa[1]),
-                f(l.kappa[2]),
-                f(l.sigma_s[0]),
-                f(l.sigma_s[1]),
-                f(l.sigma_s[2]),
-                f(l.sigma_a[0]),
-                f(l.sigma_a[1]),
-                f(l.sigma_a[2]),
-                f(l.roughness),
-                f(l.depth),
-                f(l.g),
-                0.0,
-            ];
-        }
+        specialize_values(layers, &mut spec);
     }
     if let Some(b) = baked {
-        spec.lobe_count = b.lobe_count;
-        spec.retro_mask = b.retro_mask;
-        spec.baked_size = b.size;
+        b.specialize(&mut spec);
     }
     Ok(spec)
+}
+
+impl Structure {
+    /// The structure of `layers` for a per-material pipeline of `variant`, whose mode a
+    /// layer-count error names.
+    pub fn for_variant(
+        variant: VariantKey,
+        layers: &[LayerParams],
+    ) -> Result<Self, SpecializeError> {
+        Self::of(variant.model, layers).map_err(|e| match e {
+            SpecializeError::LayerCount { count, .. } => SpecializeError::LayerCount {
+                mode: variant.mode,
+                count,
+            },
+            other => other,
+        })
+    }
+
+    /// Tells `spec` this structure; the arrays get the material's own size (`max_layers`
+    /// does not matter).
+    pub fn specialize(&self, spec: &mut ShadeSpec) {
+        spec.max_layers = self.layer_count;
+        spec.layer_count = self.layer_count;
+        spec.smooth_mask = self.smooth_mask;
+        spec.conductor_base = u32::from(self.conductor_base);
+        spec.medium_mask = self.medium_mask;
+        spec.denser_mask = self.denser_mask;
+        spec.matched_mask = self.matched_mask;
+        spec.clear_mask = self.clear_mask;
+    }
+}
+
+impl BakedShape {
+    /// Tells `spec` the baked table's shape.
+    pub fn specialize(&self, spec: &mut ShadeSpec) {
+        spec.lobe_count = self.lobe_count;
+        spec.retro_mask = self.retro_mask;
+        spec.baked_size = self.size;
+    }
+}
+
+/// Tells `spec` the values of `layers` (`mode=specialized-values`).
+pub fn specialize_values(layers: &[LayerParams], spec: &mut ShadeSpec) {
+    for (dst, l) in spec.values.iter_mut().zip(layers) {
+        let f = |v: f64| v as f32;
+        *dst = [
+            f(l.ior[0]),
+            f(l.ior[1]),
+            f(l.ior[2]),
+            f(l.kappa[0]),
+            f(l.kappa[1]),
+            f(l.kappa[2]),
+            f(l.sigma_s[0]),
+            f(l.sigma_s[1]),
+            f(l.sigma_s[2]),
+            f(l.sigma_a[0]),
+            f(l.sigma_a[1]),
+            f(l.sigma_a[2]),
+            f(l.roughness),
+            f(l.depth),
+            f(l.g),
+            0.0,
+        ];
+    }
 }
 
 #[cfg(test)]
@@ -184,16 +211,8 @@ mod tests {
     use super::*;
 
     fn layer(ior: f64, kappa: f64, roughness: f64, depth: f64) -> LayerParams {
-        LayerParams {
-            ior: [ior; 3],
-            kappa: [kappa; 3],
-            roughness,
-            depth,
-            sigma_s: [1.0; 3],
-            sigma_a: [0.1; 3],
-            g: 0.3,
-            diffuse: None,
-        }
+        LayerParams::conductor([ior; 3], [kappa; 3], roughness)
+            .with_medium(depth, [1.0; 3], [0.1; 3], 0.3)
     }
 
     #[test]

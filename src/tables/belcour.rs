@@ -16,8 +16,8 @@ use crate::model::fresnel;
 /// Basis samples, uniform in μ ∈ [0, 1] (as the paper's notebook).
 pub const POINTS: usize = 1000;
 /// The projection's nodes: where b2 peaks and b3 bottoms out in the paper's basis.
-pub const CT1: f64 = 128.0 / 999.0;
-pub const CT2: f64 = 432.0 / 999.0;
+pub const CT1: f64 = crate::shader::interface::BELCOUR_CT1;
+pub const CT2: f64 = crate::shader::interface::BELCOUR_CT2;
 /// Dielectric curves of the training set (99 % of it).
 pub const TRAINING_DIELECTRICS: usize = 297;
 /// Gulbrandsen reflectivities of the conductor curves (edge tint 1).

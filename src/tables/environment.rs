@@ -18,7 +18,8 @@ use crate::imageio::HdrImage;
 use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_2D};
 use crate::vk::{
     submit_and_wait, upload_image, BindingKind, Buffer, BufferUsageFlags, DescriptorSet, Format,
-    Image, ImageDesc, ImageState, ImageUsageFlags, ImageView, Resource, Sampler, SamplerDesc,
+    Image, ImageDesc, ImageState, ImageUsageFlags, ImageView, Recorder, Resource, Sampler,
+    SamplerDesc,
 };
 
 /// Size and quality of the prefiltered cube.
@@ -107,28 +108,7 @@ impl Environment {
         let device = &gpu.device;
         let size = desc.face_size;
 
-        let halves: Vec<f16> = equirect
-            .pixels
-            .iter()
-            .flat_map(|p| [p[0], p[1], p[2], 1.0])
-            .map(|c| f16::from_f32(c.min(HALF_MAX)))
-            .collect();
-        let source_2d = Image::new(
-            device,
-            ImageDesc::new_2d(
-                Format::R16G16B16A16_SFLOAT,
-                equirect.width as u32,
-                equirect.height as u32,
-            ),
-            "equirect",
-        )?;
-        upload_image(
-            device,
-            &source_2d,
-            bytemuck::cast_slice(&halves),
-            ImageState::ComputeRead,
-        )?;
-        let source_2d_view = source_2d.view("equirect")?;
+        let (_source_2d, source_2d_view) = upload_equirect(gpu, equirect)?;
         let equirect_sampler = Sampler::new(device, SamplerDesc::equirect(), "equirect")?;
         let cube_sampler = Sampler::new(device, SamplerDesc::linear_clamp(), "cube source")?;
 
@@ -143,7 +123,6 @@ impl Environment {
                 .usage(storage_usage),
             "environment source cube",
         )?;
-        let source_levels = source.desc.mip_levels;
         let source_view = source.view("environment source cube")?;
         let source_mip0 = source.mip_view(0, "environment source mip 0")?;
         let cube = Image::new(
@@ -185,72 +164,10 @@ impl Environment {
                 &ConvertPush { face_size: size },
                 [size, size, 6],
             );
-            rec.transition(
-                &source,
-                0..1,
-                ImageState::ComputeWrite,
-                ImageState::TransferSrc,
-            );
-            for mip in 1..source_levels {
-                rec.transition(
-                    &source,
-                    mip..mip + 1,
-                    ImageState::Undefined,
-                    ImageState::TransferDst,
-                );
-                rec.blit_mip_down(&source, mip);
-                rec.transition(
-                    &source,
-                    mip..mip + 1,
-                    ImageState::TransferDst,
-                    ImageState::TransferSrc,
-                );
-            }
-            rec.transition(&cube, 0..1, ImageState::Undefined, ImageState::TransferDst);
-            rec.copy_mip0(&source, &cube);
-            rec.transition(
-                &cube,
-                0..1,
-                ImageState::TransferDst,
-                ImageState::FragmentRead,
-            );
-            rec.transition(
-                &source,
-                0..source_levels,
-                ImageState::TransferSrc,
-                ImageState::ComputeRead,
-            );
+            record_mip_chain(rec, &source, &cube);
             rec.end_label();
-
             rec.begin_label("GGX prefilter");
-            let mips = 1..desc.mip_count;
-            rec.transition(
-                &cube,
-                mips.clone(),
-                ImageState::Undefined,
-                ImageState::ComputeWrite,
-            );
-            for (mip, _, set) in &targets {
-                let r = *mip as f32 / (desc.mip_count - 1) as f32;
-                let (w, _, _) = cube.desc.mip_extent(*mip);
-                prefilter.record_dispatch(
-                    rec,
-                    &[set],
-                    &PrefilterPush {
-                        alpha: r * r,
-                        source_size: size,
-                        destination_size: w,
-                        sample_count: desc.samples,
-                    },
-                    [w, w, 6],
-                );
-            }
-            rec.transition(
-                &cube,
-                mips,
-                ImageState::ComputeWrite,
-                ImageState::FragmentRead,
-            );
+            record_prefilter(rec, &prefilter, &targets, &cube, desc);
             rec.end_label();
             Ok(())
         })?;
@@ -281,6 +198,114 @@ impl Environment {
             .map(|c| [c[0].to_f32(), c[1].to_f32(), c[2].to_f32(), c[3].to_f32()])
             .collect())
     }
+}
+
+/// The equirectangular map as a half-float 2-D image the conversion samples.
+fn upload_equirect(gpu: &Gpu, equirect: &HdrImage) -> Result<(Image, ImageView)> {
+    let device = &gpu.device;
+    let halves: Vec<f16> = equirect
+        .pixels
+        .iter()
+        .flat_map(|p| [p[0], p[1], p[2], 1.0])
+        .map(|c| f16::from_f32(c.min(HALF_MAX)))
+        .collect();
+    let image = Image::new(
+        device,
+        ImageDesc::new_2d(
+            Format::R16G16B16A16_SFLOAT,
+            equirect.width as u32,
+            equirect.height as u32,
+        ),
+        "equirect",
+    )?;
+    upload_image(
+        device,
+        &image,
+        bytemuck::cast_slice(&halves),
+        ImageState::ComputeRead,
+    )?;
+    let view = image.view("equirect")?;
+    Ok((image, view))
+}
+
+/// Records the source cube's mip chain (each mip blitted from the one above, after mip 0 was
+/// written by the conversion) and the copy of its mip 0 into the prefiltered cube.
+fn record_mip_chain(rec: &mut Recorder, source: &Image, cube: &Image) {
+    let source_levels = source.desc.mip_levels;
+    rec.transition(
+        source,
+        0..1,
+        ImageState::ComputeWrite,
+        ImageState::TransferSrc,
+    );
+    for mip in 1..source_levels {
+        rec.transition(
+            source,
+            mip..mip + 1,
+            ImageState::Undefined,
+            ImageState::TransferDst,
+        );
+        rec.blit_mip_down(source, mip);
+        rec.transition(
+            source,
+            mip..mip + 1,
+            ImageState::TransferDst,
+            ImageState::TransferSrc,
+        );
+    }
+    rec.transition(cube, 0..1, ImageState::Undefined, ImageState::TransferDst);
+    rec.copy_mip0(source, cube);
+    rec.transition(
+        cube,
+        0..1,
+        ImageState::TransferDst,
+        ImageState::FragmentRead,
+    );
+    rec.transition(
+        source,
+        0..source_levels,
+        ImageState::TransferSrc,
+        ImageState::ComputeRead,
+    );
+}
+
+/// Records the GGX prefilter of every mip of `cube` below the first from the source cube
+/// (`targets`: each mip with its view and descriptor set).
+fn record_prefilter(
+    rec: &mut Recorder,
+    prefilter: &ComputeKernel,
+    targets: &[(u32, ImageView, DescriptorSet)],
+    cube: &Image,
+    desc: EnvDesc,
+) {
+    let mips = 1..desc.mip_count;
+    rec.transition(
+        cube,
+        mips.clone(),
+        ImageState::Undefined,
+        ImageState::ComputeWrite,
+    );
+    for (mip, _, set) in targets {
+        let r = *mip as f32 / (desc.mip_count - 1) as f32;
+        let (w, _, _) = cube.desc.mip_extent(*mip);
+        prefilter.record_dispatch(
+            rec,
+            &[set],
+            &PrefilterPush {
+                alpha: r * r,
+                source_size: desc.face_size,
+                destination_size: w,
+                sample_count: desc.samples,
+            },
+            [w, w, 6],
+        );
+    }
+    rec.transition(
+        cube,
+        mips,
+        ImageState::ComputeWrite,
+        ImageState::FragmentRead,
+    );
 }
 
 /// The real spherical harmonics of order ≤ 2 at unit direction `d`, in the order Y00, Y1−1,

@@ -16,13 +16,13 @@
 
 use std::path::Path;
 
+use crate::cache;
 use crate::error::{Error, Result};
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::{fresnel, microfacet};
 use crate::shader::interface::{material_buffer, InputViews, ShadingLayout, FGD_GRID_SIZE};
 use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_1D, LOCAL_SIZE_2D};
 use crate::tables::belcour::Basis;
-use crate::tables::cache;
 use crate::tables::split_sum::SplitSumTable;
 use crate::tables::tir::TirTable;
 use crate::tables::{filter_axis, Texels};
@@ -42,8 +42,8 @@ pub const GRID_SAMPLES: u32 = 1024;
 /// Samples per texel of the Belcour table (64² texels: cheap).
 pub const BELCOUR_SAMPLES: u32 = 4096;
 /// The 4-D table's domain in η and κ.
-pub const ETA_MAX: f64 = 4.0;
-pub const KAPPA_MAX: f64 = 4.0;
+pub const ETA_MAX: f64 = crate::shader::interface::FGD_ETA_MAX;
+pub const KAPPA_MAX: f64 = crate::shader::interface::FGD_KAPPA_MAX;
 /// Depth of the stacked 4-D image: `fgd=4d` needs `maxImageDimension3D` at least this.
 pub const FULL_DEPTH: u32 = SIZE * SIZE;
 const MAX_GRID_SAMPLES: u32 = 1024;
@@ -499,7 +499,7 @@ const TABLE_USAGE: crate::vk::ImageUsageFlags = crate::vk::ImageUsageFlags::from
 impl FgdImages {
     /// The tables of `fgd` for the G2 form `g2`, from the disk cache or built.
     pub fn for_variant(gpu: &Gpu, fgd: Fgd, g2: G2) -> Result<Self> {
-        let dir = cache::dir();
+        let dir = cache::tables_dir();
         match fgd {
             Fgd::Karis => Self::new(gpu, FgdTwin::Karis, [2, 2, 2], &[0.0; 8], 1, &[[0.0; 4]]),
             Fgd::Belcour => {

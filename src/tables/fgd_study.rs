@@ -15,9 +15,9 @@ use crate::model::Fgd as _;
 use crate::variant::{Fgd, G2};
 
 use super::belcour::Basis;
-use super::cache;
 use super::fgd::{self, resampled_at, BelcourTable, FgdImages, FgdProbe, Filter, Grid, GridKind};
 use super::split_sum::{self, SplitSumTable};
+use crate::cache;
 
 /// The G2 form `lamina tables` builds the FGD tables with: the renderer's default.
 pub const G2_FORM: G2 = G2::HeightCorrelated;

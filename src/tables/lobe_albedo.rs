@@ -13,13 +13,14 @@
 use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::model::light;
+use crate::shader::interface::LOBE_ALBEDO_SIZE;
 use crate::variant::G2;
 use crate::vk::{upload_image, Format, Image, ImageDesc, ImageState, ImageView};
 
 use super::{filter_axis, Texels};
 
-/// Texels per side: the split-sum table's.
-pub const SIZE: u32 = 64;
+/// Texels per side ([`LOBE_ALBEDO_SIZE`], which the shaders read too).
+pub const SIZE: u32 = LOBE_ALBEDO_SIZE;
 
 /// Bumped when the quadrature or the layout changes, so cached tables are rebuilt.
 const VERSION: u32 = 2;
@@ -39,23 +40,23 @@ pub struct LobeAlbedoTable {
 impl LobeAlbedoTable {
     /// From the disk cache when there, else computed (a few seconds) and stored.
     pub fn load_or_build(gpu: &Gpu, g2: G2) -> Result<Self> {
-        let key = super::cache::Key {
+        let key = crate::cache::Key {
             kind: "lobe-albedo",
             params: vec![SIZE, crate::variant::Axis::code(g2)],
             shader_hash: u64::from(VERSION),
         };
-        let dir = super::cache::dir();
+        let dir = crate::cache::tables_dir();
         let count = (SIZE * SIZE) as usize;
         let texels = match dir
             .as_deref()
-            .and_then(|d| super::cache::load(d, &key, count))
+            .and_then(|d| crate::cache::load(d, &key, count))
         {
             Some(texels) => texels,
             None => {
                 let texels = compute(g2, SIZE);
                 if let Some(dir) = dir {
                     // A cache that cannot be written costs a rebuild next time, nothing more.
-                    let _ = super::cache::store(&dir, &key, &texels);
+                    let _ = crate::cache::store(&dir, &key, &texels);
                 }
                 texels
             }

@@ -8,7 +8,6 @@
 //! (the coefficients of `tir=fit`).
 
 pub mod belcour;
-pub mod cache;
 pub mod environment;
 pub mod fgd;
 pub mod fgd_study;

@@ -52,16 +52,16 @@ impl SplitSumTable {
     /// The table from the disk cache ([`super::cache`]) when a valid one exists, else built and
     /// stored there.
     pub fn load_or_build(gpu: &Gpu, g2: G2, size: u32, samples: u32) -> Result<Self> {
-        let key = super::cache::Key {
+        let key = crate::cache::Key {
             kind: "split-sum",
             params: vec![size, samples, crate::variant::Axis::code(g2)],
             shader_hash: crate::shader::entry_hash("split_sum.comp.glsl"),
         };
-        let dir = super::cache::dir();
+        let dir = crate::cache::tables_dir();
         let count = (size * size * 2) as usize;
         if let Some(values) = dir
             .as_deref()
-            .and_then(|d| super::cache::load(d, &key, count))
+            .and_then(|d| crate::cache::load(d, &key, count))
         {
             let texels = values.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
             return Self::from_texels(gpu, size, texels);
@@ -70,7 +70,7 @@ impl SplitSumTable {
         if let Some(dir) = dir {
             let flat: Vec<f32> = table.texels.iter().flatten().copied().collect();
             // A cache that cannot be written costs a rebuild next time, nothing more.
-            let _ = super::cache::store(&dir, &key, &flat);
+            let _ = crate::cache::store(&dir, &key, &flat);
         }
         Ok(table)
     }

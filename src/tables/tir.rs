@@ -12,11 +12,11 @@ use half::f16;
 
 use std::path::Path;
 
+use crate::cache;
 use crate::error::Result;
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::shader::interface::TIR_TABLE_SIZE;
 use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_2D};
-use crate::tables::cache;
 use crate::tables::{filter_axis, Texels};
 use crate::variant::Tir;
 use crate::vk::{
@@ -180,7 +180,7 @@ impl TirTable {
     /// `lut16`, else a 2³ table of zeros that only fills the descriptor.
     pub fn for_variant(gpu: &Gpu, tir: Tir) -> Result<Self> {
         if matches!(tir, Tir::Lut32 | Tir::Lut16) {
-            let dir = cache::dir();
+            let dir = cache::tables_dir();
             Ok(Self::load_or_build(
                 gpu,
                 DEFAULT_SIZE,

@@ -13,10 +13,10 @@ use crate::gpu::Gpu;
 use crate::model::tir::{AnalyticTir, FitTir};
 use crate::model::tir_fit::COEFFICIENTS;
 use crate::model::Tir;
-use crate::profile::stats::MinMeanMax;
+use crate::stats::MinMeanMax;
 
-use super::cache;
 use super::tir::{self, ErrorStats, TirTable};
+use crate::cache;
 
 /// The numbers `lamina tables tir` prints about a table.
 #[derive(Clone, Copy, Debug)]

@@ -33,8 +33,8 @@ use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::imageio;
 use crate::material::Stack;
-use crate::profile::stats::MinMeanMax;
 use crate::render::scene::Camera;
+use crate::stats::MinMeanMax;
 use crate::variant::{Model, VariantKey};
 use crate::vk::{
     submit_frame, Acquired, Buffer, BufferDesc, DeviceSelector, Format, ImageState, InstanceDesc,

@@ -9,9 +9,8 @@ use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::imageio;
 use crate::model::LayerParams;
-use crate::render::forward::ForwardPass;
 use crate::render::scene::{torus, uv_sphere, Camera};
-use crate::render::Renderer;
+use crate::render::{PassCache, PassKey, Renderer};
 use crate::tables::environment::EnvDesc;
 use crate::variant::VariantKey;
 use crate::vk::{DeviceSelector, InstanceDesc};
@@ -81,7 +80,8 @@ pub fn serve(
     )?;
     let equirect = read_env(&env)?;
     let mut renderer = Renderer::new(&gpu, &equirect, VIEWER_ENV)?;
-    let mut pass: Option<ForwardPass> = None;
+    // One pass at a time: an edit that names another pass rebuilds it, as the UI counts.
+    let mut passes = PassCache::bounded(1);
     while let Ok(mut request) = requests.recv() {
         // Only the newest frame matters; keep the scene changes of the skipped ones.
         while let Ok(newer) = requests.try_recv() {
@@ -93,7 +93,7 @@ pub fn serve(
                 ..newer
             };
         }
-        let reply = match step(&mut renderer, &mut pass, &request, &replies) {
+        let reply = match step(&mut renderer, &mut passes, &request, &replies) {
             Ok(Some(frame)) => Reply::Frame(frame),
             Ok(None) => Reply::Skipped,
             Err(e) => Reply::Failed(e.to_string()),
@@ -102,14 +102,14 @@ pub fn serve(
             break;
         }
     }
-    drop(pass);
+    drop(passes);
     drop(renderer);
     Ok(gpu.device.validation_problems())
 }
 
 fn step(
     renderer: &mut Renderer<'_>,
-    pass: &mut Option<ForwardPass>,
+    passes: &mut PassCache,
     request: &Request,
     replies: &Sender<Reply>,
 ) -> Result<Option<Frame>> {
@@ -123,35 +123,34 @@ fn step(
         };
         renderer.set_mesh(&mesh)?;
     }
-    // A per-material pass is rebuilt when the edit changes what it was built for: the
-    // structure under `specialized`, any value under `specialized-values` and `baked`.
     renderer.set_surface(request.surface.as_ref())?;
-    // Before any pass is prepared: a pass is built with or without the light loops.
     renderer.lighting = request.lighting.clone();
-    let compiled = match pass.as_ref() {
-        Some(p) => {
-            p.variant != request.variant
-                || p.surface != crate::render::surface::spec_bits(request.surface.as_ref())
-                || p.diffuse != crate::model::ends_diffuse(&request.layers)
-                || p.lights == request.lighting.lights.is_empty()
-                || (p.material.is_some() && p.check_material(&request.layers).is_err())
-        }
-        None => true,
-    };
+    // An edit names another pass when it changes what the pass was built for: the structure
+    // under `specialized`, any value under `specialized-values` and `baked`, the maps, a
+    // diffuse base, the lights.
+    let key = PassKey::new(
+        request.variant,
+        &request.layers,
+        request.surface.as_deref(),
+        &request.lighting,
+    );
+    let compiled = key.as_ref().map_or(true, |k| passes.find(k).is_none());
     if compiled {
-        let outcome = renderer.prepare(request.variant, &request.layers);
-        let error = outcome.as_ref().err().map(|e| e.to_string());
+        let built = key.as_ref().map_err(|e| e.to_string()).and_then(|k| {
+            passes
+                .get(renderer, k)
+                .map(|_| ())
+                .map_err(|e| e.to_string())
+        });
         let _ = replies.send(Reply::Compiled {
             variant: request.variant,
-            error,
+            error: built.err(),
         });
-        match outcome {
-            Ok(p) => *pass = Some(p),
-            Err(_) => return Ok(None),
-        }
     }
-    let pass = pass.as_ref().expect("prepared above");
-    if pass.check_material(&request.layers).is_err() {
+    let Some(pass) = key.ok().and_then(|k| passes.find(&k)) else {
+        return Ok(None);
+    };
+    if pass.key.admits(&request.layers).is_err() {
         return Ok(None);
     }
     renderer.camera = request.camera;

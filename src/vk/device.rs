@@ -183,6 +183,116 @@ pub struct Device {
     pub(crate) instance: Arc<Instance>,
 }
 
+/// The physical device `selector` picks among the instance's, with its report; an error when
+/// it names none, or when the one it names lacks what lamina needs.
+fn choose(
+    instance: &Instance,
+    selector: &DeviceSelector,
+) -> VkResult<(vk::PhysicalDevice, DeviceReport)> {
+    // SAFETY: plain enumeration on a live instance.
+    let pds =
+        unsafe { instance.raw.enumerate_physical_devices() }.check("vkEnumeratePhysicalDevices")?;
+    let reports: Vec<DeviceReport> = pds
+        .iter()
+        .enumerate()
+        .map(|(i, &pd)| report(&instance.raw, i, pd))
+        .collect();
+    let usable = |r: &DeviceReport| {
+        r.dynamic_rendering
+            && r.synchronization2
+            && r.maintenance4
+            && r.host_query_reset
+            && universal_queue_family(&instance.raw, pds[r.index]).is_some()
+    };
+    let chosen = match selector {
+        DeviceSelector::Index(i) => reports.get(*i),
+        DeviceSelector::Name(n) => {
+            let n = n.to_lowercase();
+            reports.iter().find(|r| r.name.to_lowercase().contains(&n))
+        }
+        DeviceSelector::Best => {
+            let rank = |r: &DeviceReport| match r.device_type.as_str() {
+                "DISCRETE_GPU" => 0,
+                "INTEGRATED_GPU" => 1,
+                "VIRTUAL_GPU" => 2,
+                _ => 3,
+            };
+            reports.iter().filter(|r| usable(r)).min_by_key(|r| rank(r))
+        }
+    };
+    let Some(chosen) = chosen.cloned() else {
+        return Err(VkError::NoSuchDevice {
+            wanted: format!("{selector:?}"),
+            available: reports
+                .iter()
+                .map(|r| format!("{}: {}", r.index, r.name))
+                .collect::<Vec<_>>()
+                .join(", "),
+        });
+    };
+    if !usable(&chosen) {
+        return Err(VkError::Unsupported(format!(
+            "device `{}` lacks Vulkan 1.3 dynamic rendering, synchronization2, maintenance4, host \
+             query reset or a graphics+compute queue",
+            chosen.name
+        )));
+    }
+    Ok((pds[chosen.index], chosen))
+}
+
+/// The logical device on `physical` with one queue of `queue_family`, the features lamina
+/// uses and the extensions `chosen` reports (pipeline executable properties; the swapchain
+/// when the instance has a surface); and whether it has the swapchain.
+fn create_logical(
+    instance: &Instance,
+    physical: vk::PhysicalDevice,
+    chosen: &DeviceReport,
+    queue_family: u32,
+) -> VkResult<(ash::Device, bool)> {
+    let priorities = [1.0f32];
+    let queue_infos = [vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(queue_family)
+        .queue_priorities(&priorities)];
+    let mut extensions: Vec<*const i8> = Vec::new();
+    if chosen.pipeline_executable_properties {
+        extensions.push(ash::khr::pipeline_executable_properties::NAME.as_ptr());
+    }
+    // SAFETY: plain enumeration on a live physical device.
+    let device_extensions = unsafe { instance.raw.enumerate_device_extension_properties(physical) }
+        .check("vkEnumerateDeviceExtensionProperties")?;
+    let swapchain = instance.surface
+        && device_extensions
+            .iter()
+            .any(|e| e.extension_name_as_c_str() == Ok(ash::khr::swapchain::NAME));
+    if swapchain {
+        extensions.push(ash::khr::swapchain::NAME.as_ptr());
+    }
+    let core =
+        vk::PhysicalDeviceFeatures::default().pipeline_statistics_query(chosen.pipeline_statistics);
+    let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
+        .host_query_reset(true)
+        .shader_float16(chosen.shader_float16);
+    let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
+        .dynamic_rendering(true)
+        .synchronization2(true)
+        .maintenance4(true);
+    let mut exec = vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default()
+        .pipeline_executable_info(true);
+    let mut info = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queue_infos)
+        .enabled_extension_names(&extensions)
+        .enabled_features(&core)
+        .push_next(&mut f12)
+        .push_next(&mut f13);
+    if chosen.pipeline_executable_properties {
+        info = info.push_next(&mut exec);
+    }
+    // SAFETY: the features requested were reported as supported by `physical`.
+    let raw =
+        unsafe { instance.raw.create_device(physical, &info, None) }.check("vkCreateDevice")?;
+    Ok((raw, swapchain))
+}
+
 impl Device {
     /// Creates an instance per `desc` and a device chosen by `selector`.
     pub fn create(desc: InstanceDesc, selector: &DeviceSelector) -> VkResult<Arc<Self>> {
@@ -191,104 +301,11 @@ impl Device {
     }
 
     pub fn new(instance: Arc<Instance>, selector: &DeviceSelector) -> VkResult<Arc<Self>> {
-        // SAFETY: plain enumeration on a live instance.
-        let pds = unsafe { instance.raw.enumerate_physical_devices() }
-            .check("vkEnumeratePhysicalDevices")?;
-        let reports: Vec<DeviceReport> = pds
-            .iter()
-            .enumerate()
-            .map(|(i, &pd)| report(&instance.raw, i, pd))
-            .collect();
-        let available = || {
-            reports
-                .iter()
-                .map(|r| format!("{}: {}", r.index, r.name))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        let usable = |r: &DeviceReport| {
-            r.dynamic_rendering
-                && r.synchronization2
-                && r.maintenance4
-                && r.host_query_reset
-                && universal_queue_family(&instance.raw, pds[r.index]).is_some()
-        };
-        let chosen = match selector {
-            DeviceSelector::Index(i) => reports.get(*i),
-            DeviceSelector::Name(n) => {
-                let n = n.to_lowercase();
-                reports.iter().find(|r| r.name.to_lowercase().contains(&n))
-            }
-            DeviceSelector::Best => {
-                let rank = |r: &DeviceReport| match r.device_type.as_str() {
-                    "DISCRETE_GPU" => 0,
-                    "INTEGRATED_GPU" => 1,
-                    "VIRTUAL_GPU" => 2,
-                    _ => 3,
-                };
-                reports.iter().filter(|r| usable(r)).min_by_key(|r| rank(r))
-            }
-        };
-        let Some(chosen) = chosen.cloned() else {
-            return Err(VkError::NoSuchDevice {
-                wanted: format!("{selector:?}"),
-                available: available(),
-            });
-        };
-        if !usable(&chosen) {
-            return Err(VkError::Unsupported(format!(
-                "device `{}` lacks Vulkan 1.3 dynamic rendering, synchronization2, maintenance4, \
-                 host query reset or a graphics+compute queue",
-                chosen.name
-            )));
-        }
-        let physical = pds[chosen.index];
+        let (physical, chosen) = choose(&instance, selector)?;
         let (queue_family, _) =
             universal_queue_family(&instance.raw, physical).expect("checked by `usable`");
-
-        let priorities = [1.0f32];
-        let queue_infos = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(queue_family)
-            .queue_priorities(&priorities)];
-        let mut extensions: Vec<*const i8> = Vec::new();
-        if chosen.pipeline_executable_properties {
-            extensions.push(ash::khr::pipeline_executable_properties::NAME.as_ptr());
-        }
-        // SAFETY: plain enumeration on a live physical device.
-        let device_extensions =
-            unsafe { instance.raw.enumerate_device_extension_properties(physical) }
-                .check("vkEnumerateDeviceExtensionProperties")?;
-        let swapchain = instance.surface
-            && device_extensions
-                .iter()
-                .any(|e| e.extension_name_as_c_str() == Ok(ash::khr::swapchain::NAME));
-        if swapchain {
-            extensions.push(ash::khr::swapchain::NAME.as_ptr());
-        }
-        let core = vk::PhysicalDeviceFeatures::default()
-            .pipeline_statistics_query(chosen.pipeline_statistics);
-        let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
-            .host_query_reset(true)
-            .shader_float16(chosen.shader_float16);
-        let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
-            .dynamic_rendering(true)
-            .synchronization2(true)
-            .maintenance4(true);
-        let mut exec = vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default()
-            .pipeline_executable_info(true);
-        let mut info = vk::DeviceCreateInfo::default()
-            .queue_create_infos(&queue_infos)
-            .enabled_extension_names(&extensions)
-            .enabled_features(&core)
-            .push_next(&mut f12)
-            .push_next(&mut f13);
-        if chosen.pipeline_executable_properties {
-            info = info.push_next(&mut exec);
-        }
-        // SAFETY: the features requested were reported as supported by `physical`.
-        let raw =
-            unsafe { instance.raw.create_device(physical, &info, None) }.check("vkCreateDevice")?;
-        // SAFETY: family and index were requested in `queue_infos`.
+        let (raw, swapchain) = create_logical(&instance, physical, &chosen, queue_family)?;
+        // SAFETY: family and index were requested in `create_logical`'s queue infos.
         let queue = unsafe { raw.get_device_queue(queue_family, 0) };
 
         let allocator = Allocator::new(&AllocatorCreateDesc {

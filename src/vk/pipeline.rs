@@ -199,34 +199,28 @@ impl Pipeline {
             .module(module.raw)
             .name(c"main")
             .specialization_info(&spec_info);
-        let mut feedback = vk::PipelineCreationFeedback::default();
-        let mut feedback_info = vk::PipelineCreationFeedbackCreateInfo::default()
-            .pipeline_creation_feedback(&mut feedback);
-        let info = vk::ComputePipelineCreateInfo::default()
-            .stage(stage)
-            .layout(layout.raw)
-            .flags(capture_flags(device))
-            .push_next(&mut feedback_info);
-        let start = Instant::now();
-        // SAFETY: all pointers borrow locals that outlive the call; the cache is internally
-        // synchronized.
-        let raw = unsafe {
-            device
-                .raw
-                .create_compute_pipelines(cache.raw, &[info], None)
-        }
-        .map_err(|(_, result)| VkError::Vk {
-            call: "vkCreateComputePipelines",
-            result,
-        })?[0];
-        let creation = PipelineCreation::new(start.elapsed(), feedback);
-        device.set_name(raw, name);
-        Ok(Self {
-            device: device.clone(),
-            raw,
-            bind_point: vk::PipelineBindPoint::COMPUTE,
-            creation,
-        })
+        Self::create(
+            device,
+            vk::PipelineBindPoint::COMPUTE,
+            name,
+            "vkCreateComputePipelines",
+            |feedback| {
+                let info = vk::ComputePipelineCreateInfo::default()
+                    .stage(stage)
+                    .layout(layout.raw)
+                    .flags(capture_flags(device))
+                    .push_next(feedback);
+                // SAFETY: all pointers borrow locals that outlive the call; the cache is
+                // internally synchronized.
+                unsafe {
+                    device
+                        .raw
+                        .create_compute_pipelines(cache.raw, &[info], None)
+                }
+                .map(|pipelines| pipelines[0])
+                .map_err(|(_, result)| result)
+            },
+        )
     }
 
     pub fn graphics<S: SpecConstants>(
@@ -244,17 +238,16 @@ impl Pipeline {
             .map_entries(&entries)
             .data(bytemuck::bytes_of(spec));
         let stages = [
+            (vk::ShaderStageFlags::VERTEX, &vertex),
+            (vk::ShaderStageFlags::FRAGMENT, &fragment),
+        ]
+        .map(|(stage, module)| {
             vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::VERTEX)
-                .module(vertex.raw)
+                .stage(stage)
+                .module(module.raw)
                 .name(c"main")
-                .specialization_info(&spec_info),
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::FRAGMENT)
-                .module(fragment.raw)
-                .name(c"main")
-                .specialization_info(&spec_info),
-        ];
+                .specialization_info(&spec_info)
+        });
         let bindings = [vk::VertexInputBindingDescription {
             binding: 0,
             stride: desc.vertex_stride,
@@ -279,67 +272,109 @@ impl Pipeline {
         } else {
             vk::PipelineVertexInputStateCreateInfo::default()
         };
-        let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
-            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-        let viewport = vk::PipelineViewportStateCreateInfo::default()
-            .viewport_count(1)
-            .scissor_count(1);
-        let raster = vk::PipelineRasterizationStateCreateInfo::default()
-            .polygon_mode(vk::PolygonMode::FILL)
-            .cull_mode(if desc.cull_back {
-                vk::CullModeFlags::BACK
-            } else {
-                vk::CullModeFlags::NONE
-            })
-            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-            .line_width(1.0);
-        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
-            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
         let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
             .color_write_mask(vk::ColorComponentFlags::RGBA)];
         let blend =
             vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&DYNAMIC_STATES);
         let color_formats = [desc.color_format];
         let mut rendering =
             vk::PipelineRenderingCreateInfo::default().color_attachment_formats(&color_formats);
+        let fixed = FixedFunction::new(desc.cull_back);
+        Self::create(
+            device,
+            vk::PipelineBindPoint::GRAPHICS,
+            name,
+            "vkCreateGraphicsPipelines",
+            |feedback| {
+                let info = vk::GraphicsPipelineCreateInfo::default()
+                    .stages(&stages)
+                    .vertex_input_state(&vertex_input)
+                    .input_assembly_state(&fixed.input_assembly)
+                    .viewport_state(&fixed.viewport)
+                    .rasterization_state(&fixed.raster)
+                    .multisample_state(&fixed.multisample)
+                    .color_blend_state(&blend)
+                    .dynamic_state(&dynamic)
+                    .layout(layout.raw)
+                    .flags(capture_flags(device))
+                    .push_next(&mut rendering)
+                    .push_next(feedback);
+                // SAFETY: all pointers borrow locals that outlive the call; the cache is
+                // internally synchronized.
+                unsafe {
+                    device
+                        .raw
+                        .create_graphics_pipelines(cache.raw, &[info], None)
+                }
+                .map(|pipelines| pipelines[0])
+                .map_err(|(_, result)| result)
+            },
+        )
+    }
+
+    /// The one place a pipeline comes to be: `create` makes it with the creation feedback
+    /// chained onto its create info; here it is timed, named and wrapped.
+    fn create(
+        device: &Arc<Device>,
+        bind_point: vk::PipelineBindPoint,
+        name: &str,
+        call: &'static str,
+        create: impl FnOnce(
+            &mut vk::PipelineCreationFeedbackCreateInfo<'_>,
+        ) -> Result<vk::Pipeline, vk::Result>,
+    ) -> VkResult<Self> {
         let mut feedback = vk::PipelineCreationFeedback::default();
-        let mut feedback_info = vk::PipelineCreationFeedbackCreateInfo::default()
-            .pipeline_creation_feedback(&mut feedback);
-        let info = vk::GraphicsPipelineCreateInfo::default()
-            .stages(&stages)
-            .vertex_input_state(&vertex_input)
-            .input_assembly_state(&input_assembly)
-            .viewport_state(&viewport)
-            .rasterization_state(&raster)
-            .multisample_state(&multisample)
-            .color_blend_state(&blend)
-            .dynamic_state(&dynamic)
-            .layout(layout.raw)
-            .flags(capture_flags(device))
-            .push_next(&mut rendering)
-            .push_next(&mut feedback_info);
         let start = Instant::now();
-        // SAFETY: all pointers borrow locals that outlive the call; the cache is internally
-        // synchronized.
-        let raw = unsafe {
-            device
-                .raw
-                .create_graphics_pipelines(cache.raw, &[info], None)
-        }
-        .map_err(|(_, result)| VkError::Vk {
-            call: "vkCreateGraphicsPipelines",
-            result,
-        })?[0];
+        let raw = {
+            let mut feedback_info = vk::PipelineCreationFeedbackCreateInfo::default()
+                .pipeline_creation_feedback(&mut feedback);
+            create(&mut feedback_info).map_err(|result| VkError::Vk { call, result })?
+        };
         let creation = PipelineCreation::new(start.elapsed(), feedback);
         device.set_name(raw, name);
         Ok(Self {
             device: device.clone(),
             raw,
-            bind_point: vk::PipelineBindPoint::GRAPHICS,
+            bind_point,
             creation,
         })
+    }
+}
+
+/// The graphics pipelines' dynamic state: the viewport and scissor, set at each draw.
+const DYNAMIC_STATES: [vk::DynamicState; 2] =
+    [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+
+/// The fixed-function state every graphics pipeline shares: triangle lists, one dynamic
+/// viewport, filled counter-clockwise triangles (culled from the back when asked), one sample.
+struct FixedFunction {
+    input_assembly: vk::PipelineInputAssemblyStateCreateInfo<'static>,
+    viewport: vk::PipelineViewportStateCreateInfo<'static>,
+    raster: vk::PipelineRasterizationStateCreateInfo<'static>,
+    multisample: vk::PipelineMultisampleStateCreateInfo<'static>,
+}
+
+impl FixedFunction {
+    fn new(cull_back: bool) -> Self {
+        Self {
+            input_assembly: vk::PipelineInputAssemblyStateCreateInfo::default()
+                .topology(vk::PrimitiveTopology::TRIANGLE_LIST),
+            viewport: vk::PipelineViewportStateCreateInfo::default()
+                .viewport_count(1)
+                .scissor_count(1),
+            raster: vk::PipelineRasterizationStateCreateInfo::default()
+                .polygon_mode(vk::PolygonMode::FILL)
+                .cull_mode(if cull_back {
+                    vk::CullModeFlags::BACK
+                } else {
+                    vk::CullModeFlags::NONE
+                })
+                .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+                .line_width(1.0),
+            multisample: vk::PipelineMultisampleStateCreateInfo::default()
+                .rasterization_samples(vk::SampleCountFlags::TYPE_1),
+        }
     }
 }
 

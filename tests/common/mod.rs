@@ -3,6 +3,7 @@
 #![allow(dead_code, reason = "each test binary uses a different subset")]
 
 use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 
 use lamina::imageio::{self, HdrImage};
 use lamina::model::LayerParams;
@@ -49,14 +50,89 @@ pub fn scratch_dir(name: &str) -> PathBuf {
 
 /// A single rough gold layer (ALGORITHMS.md §12.2 n, k): the baseline's default material.
 pub fn gold() -> Vec<LayerParams> {
-    vec![LayerParams {
-        ior: [0.143245, 0.377423, 1.43919],
-        kappa: [3.98479, 2.3847, 1.60434],
-        roughness: 0.2,
-        depth: 0.0,
-        sigma_s: [0.0; 3],
-        sigma_a: [0.0; 3],
-        g: 0.0,
-        diffuse: None,
-    }]
+    vec![LayerParams::gold(0.2)]
+}
+
+/// `lamina ARGS` in `dir`, with a private runtime directory.
+pub fn lamina_command(args: &[&str], dir: &Path) -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_lamina"));
+    command
+        .args(args)
+        .current_dir(dir)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir());
+    command
+}
+
+/// Runs `lamina ARGS` in `dir` to its end.
+pub fn lamina(args: &[&str], dir: &Path) -> Output {
+    lamina_command(args, dir).output().expect("run lamina")
+}
+
+/// A process's output as text.
+pub fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// Checks a results.json against its schema (issue #5's fields, every run's fields, each run's
+/// times ordered, `frames` measured frames, baselines at ratio 1) and returns its runs.
+pub fn check_results(json: &serde_json::Value, frames: u64) -> Vec<serde_json::Value> {
+    for key in [
+        "device",
+        "git_rev",
+        "command",
+        "size",
+        "lp_num_threads",
+        "runs",
+    ] {
+        assert!(json.get(key).is_some(), "missing `{key}`");
+    }
+    for key in ["name", "driver", "api_version", "vendor_id"] {
+        assert!(json["device"].get(key).is_some(), "missing device `{key}`");
+    }
+    let runs = json["runs"].as_array().expect("runs").clone();
+    for run in &runs {
+        for key in [
+            "variant",
+            "material",
+            "frames",
+            "min_ms",
+            "median_ms",
+            "mean_ms",
+            "max_ms",
+            "stdev_ms",
+            "ratio_to_baseline",
+            "fragment_invocations",
+            "pipeline_ms",
+            "spirv_bytes",
+            "instructions",
+            "executable_stats",
+        ] {
+            assert!(run.get(key).is_some(), "run lacks `{key}`: {run}");
+        }
+        let ms = |k: &str| run[k].as_f64().unwrap();
+        assert!(ms("min_ms") <= ms("median_ms") && ms("median_ms") <= ms("max_ms"));
+        assert!(ms("min_ms") <= ms("mean_ms") && ms("mean_ms") <= ms("max_ms"));
+        assert!(ms("stdev_ms") >= 0.0);
+        assert_eq!(run["frames"], frames);
+        if run["variant"].as_str().unwrap().starts_with("model=ggx") {
+            assert_eq!(run["ratio_to_baseline"].as_f64().unwrap(), 1.0);
+        }
+    }
+    runs
+}
+
+/// Checks that results.csv has one row per run of `runs`, in order, with its variant and
+/// median time.
+pub fn check_csv(csv: &str, runs: &[serde_json::Value]) {
+    // Variant keys hold commas: find the median's column counting from the end.
+    let header: Vec<&str> = csv.lines().next().expect("a header").split(',').collect();
+    let from_end = header.len() - header.iter().position(|&c| c == "median_ms").unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), runs.len());
+    for (row, run) in rows.iter().zip(runs) {
+        assert!(row.starts_with(&format!("\"{}\"", run["variant"].as_str().unwrap())));
+        let fields: Vec<&str> = row.split(',').collect();
+        let median: f64 = fields[fields.len() - from_end].parse().unwrap();
+        assert_eq!(median, run["median_ms"].as_f64().unwrap());
+    }
 }

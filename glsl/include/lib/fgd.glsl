@@ -14,12 +14,10 @@
 
 // Texels per axis of the vertex-centred grids (the host builds them at this size).
 const float FGD_N = float(LAMINA_FGD_SIZE);
-// The 4-D table's domain in η and κ: [0, 4] each (ALGORITHMS.md §6.1); beyond it, clamped.
-const float FGD_ETA_MAX = 4.0;
-const float FGD_KAPPA_MAX = 4.0;
-// The cosines where the Belcour projection interpolates F exactly (ALGORITHMS.md §7.2).
-const float BELCOUR_CT1 = 128.0 / 999.0;
-const float BELCOUR_CT2 = 432.0 / 999.0;
+// The 4-D table's domain in η and κ (FGD_ETA_MAX, FGD_KAPPA_MAX: [0, 4] each, ALGORITHMS.md
+// §6.1; beyond it, clamped) and the cosines where the Belcour projection interpolates F exactly
+// (BELCOUR_CT1, BELCOUR_CT2, §7.2) come from src/shader/interface.rs through
+// generated/codes.glsl.
 
 // Normalised coordinate of x ∈ [0, 1] on a vertex-centred grid of FGD_N texels.
 float fgd_grid(float x) {

@@ -3,6 +3,7 @@
 #define LAMINA_LIB_SAMPLING
 
 #include "math.glsl"
+#include "microfacet.glsl"
 
 // Hammersley point i of n (radical inverse in base 2).
 vec2 hammersley(uint i, uint n) {
@@ -34,6 +35,16 @@ vec3 sample_ggx_vndf(vec3 v, vec2 u, float alpha) {
     p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * p2;
     vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
     return normalize(vec3(alpha * nh.x, alpha * nh.y, max(0.0, nh.z)));
+}
+
+// One visible-normal sample of the GGX reflection of the view v (tangent space, v.z > 0, whose
+// G1 is `g1_v`) at point u: the half vector `h`, and the weight G2(v, l)/G1(v) by which the
+// reflected direction l = reflect(−v, h) enters an estimate of the directional albedo
+// ∫ F·G2·D/(4 v.z) dl = E[F(v·h)·G2/G1] (Heitz 2018); 0 when l is below the horizon.
+float vndf_reflection(vec3 v, vec2 u, float alpha, float g1_v, out vec3 h) {
+    h = sample_ggx_vndf(v, u, alpha);
+    vec3 l = reflect(-v, h);
+    return l.z <= 0.0 ? 0.0 : float(masking_shadowing(real(v.z), real(l.z), real(alpha))) / g1_v;
 }
 
 // An orthonormal basis around n (Duff et al. 2017).

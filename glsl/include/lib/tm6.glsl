@@ -22,6 +22,7 @@
 #define LAMINA_LIB_TM6
 
 #include "tm_common.glsl"
+#include "medium.glsl"
 
 // The stack composed so far, per channel, as scattering between the three flux classes
 // (0 primary, 1 secondary forward, 2 secondary backward; src/model/adding.rs): for unit primary
@@ -243,52 +244,6 @@ void tm6_over_base(Tm6Slab s, vec3 r_c, out vec3 up[3]) {
     }
 }
 
-// 1 − e^{−x} for x ≥ 0 without the cancellation of 1.0 − exp(−x) at small x (a Taylor series
-// below 2⁻⁶, error < x⁴/24).
-float tm6_one_minus_exp_neg(float x) {
-    return x < 0.015625 ? x * (1.0 - x * (0.5 - x / 6.0)) : 1.0 - exp(-x);
-}
-
-// Back-reflection and forward transmission of the two-stream system (a, b) over optical depth
-// τ: r = S·b/(Cγ + S·a), t = γ/(Cγ + S·a) with S = sinh(γτ), C = cosh(γτ), divided through by
-// e^{γτ}/2 so that nothing grows with τ (src/model/tm6.rs: no τ clamp is needed). γ² is formed
-// as (a − b)(a + b) from the caller's sums: a² − b² loses a nearly lossless medium's absorption.
-void tm6_two_stream(vec3 a, vec3 b, vec3 a_minus_b, vec3 a_plus_b, float tau, out vec3 r,
-                    out vec3 t) {
-    vec3 gamma = sqrt(max(a_minus_b * a_plus_b, vec3(0.0)));
-    vec3 x = gamma * tau;
-    vec3 spread = vec3(tm6_one_minus_exp_neg(2.0 * x.r), tm6_one_minus_exp_neg(2.0 * x.g),
-                       tm6_one_minus_exp_neg(2.0 * x.b));
-    vec3 inv = 1.0 / (gamma * (2.0 - spread) + a * spread);
-    r = b * spread * inv;
-    t = 2.0 * gamma * exp(-x) * inv;
-}
-
-// Kubelka–Munk-type two-stream factors of a medium of thickness `depth` crossed at cosine
-// `mu` (§5.3, numerics §5.8): T, r_fb, t_ff and the g's of r_fb and t_ff. As src/model/tm6.rs,
-// a = σ_sb + σ_k, b = σ_sb and a_g = σ_ext − g·σ_sf, b_g = −g·σ_sb, their sums and differences
-// written as sums of non-negative terms.
-void tm6_medium_factors(LayerGpu layer, float mu, out vec3 transmission, out vec3 r_fb,
-                        out vec3 t_ff, out float g_rfb, out float g_tff) {
-    vec3 sigma_s = layer.sigma_s.rgb;
-    vec3 sigma_k = max(layer.sigma_a.rgb, vec3(1e-7));
-    float g = layer.params.z;
-    vec3 sigma_sb = sigma_s * hg_lh_norm(g);
-    vec3 sigma_sf = sigma_s - sigma_sb;
-    vec3 sigma_ext = sigma_s + sigma_k;
-    float tau = layer.params.y / max(mu, 1e-7);
-    transmission = exp(-sigma_ext * tau);
-    tm6_two_stream(sigma_sb + sigma_k, sigma_sb, sigma_k, 2.0 * sigma_sb + sigma_k, tau, r_fb,
-                   t_ff);
-    vec3 rg;
-    vec3 tg;
-    tm6_two_stream(sigma_ext - sigma_sf * g, -sigma_sb * g,
-                   sigma_sf * (1.0 - g) + sigma_sb * (1.0 + g) + sigma_k,
-                   sigma_s * (1.0 - g) + sigma_k, tau, rg, tg);
-    g_rfb = (hg_safe_ratio(rg.r, r_fb.r) + hg_safe_ratio(rg.g, r_fb.g) + hg_safe_ratio(rg.b, r_fb.b)) / 3.0;
-    g_tff = (hg_safe_ratio(tg.r, t_ff.r) + hg_safe_ratio(tg.g, t_ff.g) + hg_safe_ratio(tg.b, t_ff.b)) / 3.0;
-}
-
 // The walk so far (tm6_step): the energy slab `e` and the asymmetry slab `g`, which hold the
 // three reflectances as they grow, the lobe totals above, the g of the primary and secondary
 // paths transmitted down to the current component, which lobes the components so far allow,
@@ -358,7 +313,7 @@ bool tm6_step(uint step, uint layers, inout Tm6Walk w, inout vec3 transmittance)
         }
         w.medium = tm_medium_at(i, layer);
         if (w.medium) {
-            tm6_medium_factors(layer, cos_below, w.m_transmission, w.m_r_fb, w.m_t_ff,
+            medium_factors(layer, cos_below, w.m_transmission, w.m_r_fb, w.m_t_ff,
                                w.m_g_rfb, w.m_g_tff);
         }
         if (refracts) {
@@ -452,30 +407,6 @@ bool tm6_step(uint step, uint layers, inout Tm6Walk w, inout vec3 transmittance)
         w.prev_g[k] = now_g;
     }
     return substrate;
-}
-
-TmSlab tm_diffuse_slab(uint count, bool media) {
-    TmSlab s = tm_slab_empty();
-    float eta_above = IOR_AIR;
-    for (uint i = 0u; i < count; ++i) {
-        LayerGpu layer = tm_layer(i);
-        float eta_layer = tm_mean(layer.ior.rgb);
-        float eta = eta_layer / eta_above;
-        if (abs(eta - 1.0) >= TM_INDEX_MATCHED) {
-            float down = tm_fresnel_hemispherical(eta);
-            float up = tm_fresnel_hemispherical(1.0 / eta);
-            s = tm_over(s, real3(down), real3(1.0 - down), real3(up), real3(1.0 - up));
-            eta_above = eta_layer;
-        }
-        if (media && layer.params.y > 0.0) {
-            vec3 transmission, r_fb, t_ff;
-            float g_rfb, g_tff;
-            tm6_medium_factors(layer, 0.5, transmission, r_fb, t_ff, g_rfb, g_tff);
-            // t_ff holds the unscattered transmission too (tm6_over_medium's arguments).
-            s = tm_over_symmetric(s, real3(r_fb), real3(t_ff));
-        }
-    }
-    return s;
 }
 
 // Walks the stack top to bottom for view cosine `mu` (tm6_step). Returns the lobe count. A

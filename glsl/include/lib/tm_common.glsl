@@ -7,6 +7,7 @@
 
 #include "precision.glsl"
 #include "hg.glsl"
+#include "medium.glsl"
 #include "fgd.glsl"
 #include "tir.glsl"
 #include "../shared/variant.glsl"
@@ -23,11 +24,11 @@ const float IOR_AIR = 1.0;
 // A diffuse base's Lambertian lobe (src/model/diffuse.rs): lit by the irradiance.
 #define LOBE_DIFFUSE 2u
 
-// Largest lobe count of a variant: one per layer (2-flux); in 6-flux, the first interface
-// emits its primary lobe alone and each later component (medium, interface, …) up to three,
-// most when every layer is a dielectric with a medium: 1 + 3·(2n − 1) = 6n − 2.
-// src/render/eval.rs sizes its output by it.
-const uint TM_MAX_LOBES = MODEL == MODEL_TM6 ? 6u * MAX_LAYERS - 2u : MAX_LAYERS;
+// Largest lobe count of a variant (src/model/mod.rs's max_lobes, whose constants
+// generated/codes.glsl carries): one per layer (2-flux), 6n − 2 in 6-flux. src/render/eval.rs
+// sizes its output by it.
+const uint TM_MAX_LOBES =
+    MODEL == MODEL_TM6 ? TM6_LOBES_PER_LAYER * MAX_LAYERS - TM6_LOBES_LESS : MAX_LAYERS;
 
 // Each model hands every lobe it finds, top to bottom, to this function, which the including
 // shader defines (the forward pass shades it, tm_eval stores it): the lobes are not collected
@@ -140,10 +141,6 @@ float tm_fresnel_hemispherical(float eta) {
     }
     return inside ? 1.0 - eta * eta * (1.0 - sum) : sum;
 }
-
-// The first `count` layers as diffuse light sees them (src/model/diffuse.rs's slab), with the
-// 6-flux media crossed at μ = 1/2 when `media`. Defined in tm6.glsl, after the media.
-TmSlab tm_diffuse_slab(uint count, bool media);
 
 // The energy a diffuse base of albedo ρ sends back out through the stack above it, whose
 // transmittance towards it is `t_view` and whose diffuse slab is `d`: T·ρ·T′_d/(1 − ρR′_d).
@@ -307,6 +304,32 @@ float tm_albedo_dielectric(uint i, float mu, float alpha, float eta) {
 float tm_refracted_cos(float cos_i, float eta) {
     float c2 = 1.0 - (1.0 - cos_i * cos_i) / (eta * eta);
     return c2 > 0.0 ? sqrt(c2) : 0.0;
+}
+
+// The first `count` layers as diffuse light sees them (src/model/diffuse.rs's slab), with the
+// 6-flux media crossed at μ = 1/2 when `media`.
+TmSlab tm_diffuse_slab(uint count, bool media) {
+    TmSlab s = tm_slab_empty();
+    float eta_above = IOR_AIR;
+    for (uint i = 0u; i < count; ++i) {
+        LayerGpu layer = tm_layer(i);
+        float eta_layer = tm_mean(layer.ior.rgb);
+        float eta = eta_layer / eta_above;
+        if (abs(eta - 1.0) >= TM_INDEX_MATCHED) {
+            float down = tm_fresnel_hemispherical(eta);
+            float up = tm_fresnel_hemispherical(1.0 / eta);
+            s = tm_over(s, real3(down), real3(1.0 - down), real3(up), real3(1.0 - up));
+            eta_above = eta_layer;
+        }
+        if (media && layer.params.y > 0.0) {
+            vec3 transmission, r_fb, t_ff;
+            float g_rfb, g_tff;
+            medium_factors(layer, 0.5, transmission, r_fb, t_ff, g_rfb, g_tff);
+            // t_ff holds the unscattered transmission too (tm6_over_medium's arguments).
+            s = tm_over_symmetric(s, real3(r_fb), real3(t_ff));
+        }
+    }
+    return s;
 }
 
 #endif

@@ -1,5 +1,5 @@
-//! Sweep charts, drawn with `plotters` twice: once into SVG (text stays text) and once into an
-//! RGB canvas written as PNG. The canvas is lamina's own small plotters backend: plotters 0.3.7
+//! Charts — a study's category and XY charts, a table's heat map — drawn with `plotters`
+//! twice: once into SVG (text stays text) and once into an RGB canvas written as PNG. The canvas is lamina's own small plotters backend: plotters 0.3.7
 //! can only rasterise text through `font-kit` (system fontconfig and freetype), so the canvas
 //! draws text with the bundled DejaVu Sans ([`crate::text`]).
 

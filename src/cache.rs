@@ -1,5 +1,9 @@
-//! The on-disk cache of generated tables: `$LAMINA_CACHE/tables/` (default
-//! `~/.cache/lamina/tables/`), one file per table keyed by its kind, parameters and the hash of
+//! lamina's on-disk cache, `$LAMINA_CACHE` (default `~/.cache/lamina`): the generated tables in
+//! `tables/` (this module's files), the compiled shaders in `spirv/`
+//! (`shader::ShaderCompiler`) and the pipeline caches in `pipelines/` (`pipeline_cache`), with
+//! the checksum every one of them is verified by.
+//!
+//! Tables: one file per table keyed by its kind, parameters and the hash of
 //! the kernel that builds it (its source and includes, `shader::entry_hash`: editing another
 //! shader leaves it valid). A file is trusted only when its header matches the key exactly and its
 //! length and checksum match its data; anything else (truncated, edited, from another shader
@@ -53,13 +57,14 @@ pub fn root() -> Option<PathBuf> {
         .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache/lamina")))
 }
 
-/// The default cache directory; `None` when neither `LAMINA_CACHE` nor `HOME` is set.
-pub fn dir() -> Option<PathBuf> {
+/// The tables' directory, `tables/` under [`root`]; `None` when neither `LAMINA_CACHE` nor
+/// `HOME` is set.
+pub fn tables_dir() -> Option<PathBuf> {
     Some(root()?.join("tables"))
 }
 
 /// FNV-1a over `bytes`: catches a file edited or damaged after it was written.
-pub(crate) fn checksum(bytes: &[u8]) -> u64 {
+pub fn checksum(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
         (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
     })

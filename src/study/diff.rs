@@ -11,8 +11,9 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 
-use super::bench::{Results, Run};
-use super::report::{dirs_holding, read_json, short_variant};
+use crate::profile::results::{Results, Run};
+
+use super::dirs::{dirs_holding, read_json};
 
 /// One results.json with the name it pairs by (its directory's, for a study).
 pub struct ResultSet {
@@ -248,7 +249,7 @@ pub fn render(cmp: &Comparison) -> String {
                 count(c.old),
                 count(c.new),
                 ratio(c.instructions()),
-                short_variant(&c.new.variant),
+                c.new.variant.short(),
                 c.new.material
             );
         }
@@ -257,7 +258,7 @@ pub fn render(cmp: &Comparison) -> String {
                 let _ = writeln!(
                     out,
                     "only in {side}: {} | {}",
-                    short_variant(&r.variant),
+                    r.variant.short(),
                     r.material
                 );
             }
@@ -311,11 +312,11 @@ pub fn gate(cmp: &Comparison, percent: f64) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::profile::bench::DeviceInfo;
+    use crate::profile::results::DeviceInfo;
 
     fn run(variant: &str, material: &str, ratio: f64, jit: Option<u64>) -> Run {
         Run {
-            variant: variant.into(),
+            variant: variant.parse().unwrap(),
             material: material.into(),
             frames: 3,
             min_ms: ratio,

@@ -1,0 +1,244 @@
+//! What a shading pass is, in one value: a [`PassKey`] built once from the variant, the stack
+//! and the lighting, from which the pass's specialization constants are filled; and the
+//! [`PassCache`] through which every caller that shades several cases finds a pass for a key,
+//! or prepares one.
+//!
+//! Two cases share a pass exactly when their keys are equal: under `mode=generic` every stack
+//! that fits (a key holds no layers), under `specialized` every stack of one structure, under
+//! `specialized-values` and `baked` one stack. The spatial variation of a stack (the fields its
+//! maps vary), a diffuse base and analytic lights are part of the key too, because each of
+//! them compiles code in or out.
+
+use crate::error::{Error, Result};
+use crate::material::Surface;
+use crate::model::{ends_diffuse, LayerParams};
+use crate::shader::specialize::{
+    check_generic_fit, specialize_values, BakedShape, SpecializeError, Structure,
+};
+use crate::variant::{Mode, Model, ShadeSpec, VariantKey};
+
+use super::forward::ForwardPass;
+use super::lights::Lighting;
+use super::renderer::Renderer;
+
+/// What a pass knows of the material it shades.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MaterialKey {
+    /// `mode=generic`: any stack that fits `max_layers`, read at run time.
+    Any,
+    /// `mode=specialized`: every stack of this structure.
+    Structure(Structure),
+    /// `mode=specialized-values` and `baked`: this stack.
+    Values {
+        structure: Structure,
+        layers: Vec<LayerParams>,
+    },
+    /// A reference pass (`render::reference`): this stack's exact lobes, integrated by Monte
+    /// Carlo.
+    Reference(Vec<LayerParams>),
+}
+
+/// One shading pass's identity.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PassKey {
+    pub variant: VariantKey,
+    pub material: MaterialKey,
+    /// `SURFACE_MAPS`: 0 for a uniform stack, else the fields its maps vary
+    /// (`SurfaceMaps::spec_bits`).
+    pub surface: u32,
+    /// The stack ends in a diffuse base (`DIFFUSE_BASE`).
+    pub diffuse: bool,
+    /// The scene has analytic lights (`LIGHTS`).
+    pub lights: bool,
+}
+
+impl PassKey {
+    /// The pass that shades `layers` (top first; with the maps of `surface` when the stack
+    /// varies over the surface) in `variant` under `lighting`. Refuses what no pass of the
+    /// variant can shade: a per-material mode of the `ggx` baseline or of a varying stack, and
+    /// a stack a per-material pipeline cannot hold.
+    pub fn new(
+        variant: VariantKey,
+        layers: &[LayerParams],
+        surface: Option<&Surface>,
+        lighting: &Lighting,
+    ) -> Result<Self> {
+        let material = if variant.mode.per_material() {
+            if variant.model == Model::Ggx {
+                return Err(Error::Unsupported(format!(
+                    "variant {variant}: model=ggx is the generic baseline; it has no \
+                     per-material mode (use mode=generic)"
+                )));
+            }
+            if surface.is_some() {
+                return Err(Error::Unsupported(format!(
+                    "variant {variant}: this stack varies over the surface (textures, patterns \
+                     or coverage); it shades under mode=generic only, which reads its maps per \
+                     pixel"
+                )));
+            }
+            let structure =
+                Structure::for_variant(variant, layers).map_err(|e| specialize(variant, e))?;
+            if variant.mode == Mode::Specialized {
+                MaterialKey::Structure(structure)
+            } else {
+                MaterialKey::Values {
+                    structure,
+                    layers: layers.to_vec(),
+                }
+            }
+        } else {
+            MaterialKey::Any
+        };
+        Ok(Self {
+            variant,
+            material,
+            surface: surface.map_or(0, |s| s.maps.spec_bits()),
+            diffuse: ends_diffuse(layers),
+            lights: !lighting.lights.is_empty(),
+        })
+    }
+
+    /// The key of a uniform stack's pass.
+    pub fn uniform(
+        variant: VariantKey,
+        layers: &[LayerParams],
+        lighting: &Lighting,
+    ) -> Result<Self> {
+        Self::new(variant, layers, None, lighting)
+    }
+
+    /// The key of the reference pass of the uniform stack `layers` in `model`.
+    pub fn reference(model: Model, layers: &[LayerParams], lighting: &Lighting) -> Self {
+        Self {
+            variant: VariantKey {
+                model,
+                mode: Mode::Baked,
+                ..VariantKey::default()
+            },
+            material: MaterialKey::Reference(layers.to_vec()),
+            surface: 0,
+            diffuse: ends_diffuse(layers),
+            lights: !lighting.lights.is_empty(),
+        }
+    }
+
+    /// The stack a per-material pass is built for (`None` under `mode=generic` and
+    /// `specialized`).
+    pub fn layers(&self) -> Option<&[LayerParams]> {
+        match &self.material {
+            MaterialKey::Values { layers, .. } | MaterialKey::Reference(layers) => Some(layers),
+            MaterialKey::Any | MaterialKey::Structure(_) => None,
+        }
+    }
+
+    /// The pass's specialization constants, with a baked table's shape (`mode=baked` and the
+    /// reference pass).
+    pub fn spec(&self, baked: Option<BakedShape>) -> ShadeSpec {
+        let mut spec = self.variant.spec();
+        match &self.material {
+            MaterialKey::Any | MaterialKey::Reference(_) => {}
+            MaterialKey::Structure(structure) => structure.specialize(&mut spec),
+            MaterialKey::Values { structure, layers } => {
+                structure.specialize(&mut spec);
+                if self.variant.mode == Mode::SpecializedValues {
+                    specialize_values(layers, &mut spec);
+                }
+            }
+        }
+        if let Some(shape) = baked {
+            shape.specialize(&mut spec);
+        }
+        spec.surface_maps = self.surface;
+        spec.diffuse_base = u32::from(self.diffuse);
+        spec.lights = u32::from(self.lights);
+        spec
+    }
+
+    /// Errs unless the pass of this key shades `layers` as its variant says: any stack that
+    /// fits a generic pass, a stack of the same structure under `specialized`, the same stack
+    /// under the other modes.
+    pub fn admits(&self, layers: &[LayerParams]) -> Result<()> {
+        if ends_diffuse(layers) != self.diffuse {
+            let kind = |d: bool| if d { "ends in" } else { "has no" };
+            return Err(Error::Unsupported(format!(
+                "this pass ({}) was built for a stack that {} diffuse base and this one {} one; \
+                 prepare a pass for this stack",
+                self.variant,
+                kind(self.diffuse),
+                kind(!self.diffuse)
+            )));
+        }
+        let same = match &self.material {
+            MaterialKey::Any => return check_generic_fit(self.variant, layers),
+            MaterialKey::Structure(own) => {
+                Structure::of(self.variant.model, layers).ok().as_ref() == Some(own)
+            }
+            MaterialKey::Values { layers: own, .. } | MaterialKey::Reference(own) => {
+                own.as_slice() == layers
+            }
+        };
+        if same {
+            Ok(())
+        } else {
+            Err(Error::Unsupported(format!(
+                "this pass ({}) was built for another material; prepare one for this stack",
+                self.variant
+            )))
+        }
+    }
+}
+
+fn specialize(variant: VariantKey, e: SpecializeError) -> Error {
+    Error::Unsupported(format!("variant {variant}: {e}"))
+}
+
+/// The passes prepared so far, by key: every caller that shades several cases (the bench, the
+/// counter, the image errors, the contact sheet, the viewer) finds its pass here or prepares
+/// it here, once.
+#[derive(Default)]
+pub struct PassCache {
+    passes: Vec<ForwardPass>,
+    /// At most this many passes are kept (the least recently used goes first); `None`: all.
+    capacity: Option<usize>,
+}
+
+impl PassCache {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// A cache that keeps the `capacity` passes used last (the viewer, whose every edit may
+    /// name a new pass).
+    pub fn bounded(capacity: usize) -> Self {
+        Self {
+            passes: Vec::new(),
+            capacity: Some(capacity.max(1)),
+        }
+    }
+
+    /// The pass of `key`, prepared on `renderer` the first time it is asked for.
+    pub fn get(&mut self, renderer: &mut Renderer<'_>, key: &PassKey) -> Result<&ForwardPass> {
+        match self.passes.iter().position(|p| p.key == *key) {
+            Some(i) => {
+                let pass = self.passes.remove(i);
+                self.passes.push(pass);
+            }
+            None => {
+                let pass = renderer.prepare(key)?;
+                if let Some(capacity) = self.capacity {
+                    while self.passes.len() >= capacity {
+                        self.passes.remove(0);
+                    }
+                }
+                self.passes.push(pass);
+            }
+        }
+        Ok(self.passes.last().expect("pushed above"))
+    }
+
+    /// The pass of `key`, if prepared.
+    pub fn find(&self, key: &PassKey) -> Option<&ForwardPass> {
+        self.passes.iter().find(|p| p.key == *key)
+    }
+}

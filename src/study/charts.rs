@@ -1,0 +1,457 @@
+//! A study's charts: per x category of its first axis, the median time (min–max whiskers) and,
+//! where counted, the JIT instructions per shaded pixel, one line per combination of the other
+//! axes; the baked tables' errors; cost against image error with each material's Pareto
+//! front; and a `[reference]` study's BRDF slices, model against reference.
+
+use std::path::Path;
+
+use crate::chart::{Chart, Series, XyChart, XySeries};
+use crate::profile::results::{Results, Run};
+use crate::reference::compare::MaterialReference;
+
+use super::meta::{BakeErrorRow, StudyMeta};
+
+/// A run's cost for the Pareto charts: JIT instructions per shaded pixel where counted at two
+/// sizes, else the median time.
+fn run_cost(run: &Run, instructions: bool) -> Option<f64> {
+    if instructions {
+        run.instructions_per_pixel
+    } else {
+        Some(run.median_ms)
+    }
+}
+
+/// The runs of `material` on its Pareto front of (FLIP, cost): no other run of the material
+/// is at most as costly and at most as wrong, and better in one.
+pub fn pareto_front(results: &Results, material: &str, instructions: bool) -> Vec<usize> {
+    let points: Vec<(usize, f64, f64)> = results
+        .runs
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.material == material)
+        .filter_map(|(i, r)| Some((i, r.image_error?.flip, run_cost(r, instructions)?)))
+        .collect();
+    points
+        .iter()
+        .filter(|&&(_, e, c)| {
+            !points
+                .iter()
+                .any(|&(_, e2, c2)| e2 <= e && c2 <= c && (e2 < e || c2 < c))
+        })
+        .map(|&(i, _, _)| i)
+        .collect()
+}
+
+/// How a run is named on a chart or in a table: its coordinates, else the baseline, else its
+/// variant.
+pub fn run_label(results: &Results, meta: &StudyMeta, i: usize) -> String {
+    let run = &results.runs[i];
+    match meta.points.iter().find(|p| p.run == i) {
+        Some(p) if !p.coords.is_empty() => p.coords.join(", "),
+        _ if run.is_baseline() => "ggx baseline".to_string(),
+        _ => run.variant.to_string(),
+    }
+}
+
+/// Cost against image error, per material: every run a point (FLIP, cost), the Pareto front
+/// joined. One chart by JIT instructions per pixel where counted, one by time.
+pub fn pareto_charts(results: &Results, meta: &StudyMeta) -> Vec<(&'static str, XyChart)> {
+    if !results.runs.iter().any(|r| r.image_error.is_some()) {
+        return Vec::new();
+    }
+    let mut materials: Vec<&str> = Vec::new();
+    for r in &results.runs {
+        if r.image_error.is_some() && !materials.contains(&r.material.as_str()) {
+            materials.push(&r.material);
+        }
+    }
+    let counted = results
+        .runs
+        .iter()
+        .any(|r| r.instructions_per_pixel.is_some());
+    let kinds: &[(&'static str, bool, &str)] = if counted {
+        &[
+            (
+                "chart-pareto-instructions",
+                true,
+                "JIT instructions per shaded pixel",
+            ),
+            ("chart-pareto-time", false, "median time (ms)"),
+        ]
+    } else {
+        &[("chart-pareto-time", false, "median time (ms)")]
+    };
+    kinds
+        .iter()
+        .map(|&(stem, instructions, y_label)| {
+            let (series, max_flip) = pareto_series(results, meta, &materials, instructions);
+            (
+                stem,
+                XyChart {
+                    title: format!("{} — cost against image error", meta.title),
+                    x_label: "mean FLIP against the reference image".into(),
+                    y_label: y_label.into(),
+                    x_range: (0.0, (max_flip * 1.15).max(1e-3)),
+                    series,
+                },
+            )
+        })
+        .collect()
+}
+
+/// Per material, a point per run with an image error and the joined Pareto front, costed by
+/// instructions or time; and the largest FLIP.
+fn pareto_series(
+    results: &Results,
+    meta: &StudyMeta,
+    materials: &[&str],
+    instructions: bool,
+) -> (Vec<XySeries>, f64) {
+    let mut series = Vec::new();
+    let mut colour = 0;
+    let mut max_flip = 0.0f64;
+    for material in materials {
+        for (i, r) in results.runs.iter().enumerate() {
+            let (Some(e), Some(cost)) = (r.image_error, run_cost(r, instructions)) else {
+                continue;
+            };
+            if r.material != *material {
+                continue;
+            }
+            max_flip = max_flip.max(e.flip);
+            series.push(XySeries {
+                label: format!("{} ({})", run_label(results, meta, i), r.material),
+                points: vec![(e.flip, cost, 0.0, 0.0)],
+                line: false,
+                colour,
+            });
+            colour += 1;
+        }
+        let mut front: Vec<(f64, f64)> = pareto_front(results, material, instructions)
+            .into_iter()
+            .filter_map(|i| {
+                let r = &results.runs[i];
+                Some((r.image_error?.flip, run_cost(r, instructions)?))
+            })
+            .collect();
+        front.sort_by(|a, b| a.0.total_cmp(&b.0));
+        series.push(XySeries {
+            label: format!("Pareto front ({material})"),
+            points: front.iter().map(|&(x, y)| (x, y, 0.0, 0.0)).collect(),
+            line: true,
+            colour,
+        });
+        colour += 1;
+    }
+    (series, max_flip)
+}
+
+/// The file stem of a material's chart in a `[reference]` study: `reference-` and the name's
+/// letters and digits, the rest as `-`.
+pub fn reference_chart_stem(material: &str) -> String {
+    let name: String = material
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() {
+                c.to_ascii_lowercase()
+            } else {
+                '-'
+            }
+        })
+        .collect();
+    format!("reference-{name}")
+}
+
+/// A material's BRDF in the plane of incidence, per view cosine: the model's curve and the
+/// reference's bins (± 2 standard errors), the channels' mean.
+pub fn reference_chart(e: &MaterialReference) -> XyChart {
+    let mean = |v: [f64; 3]| (v[0] + v[1] + v[2]) / 3.0;
+    let centre = |i: usize| {
+        let (a, b) = crate::reference::slice_bin_edges(i);
+        (0.5 * (a + b)).to_degrees()
+    };
+    let mut series = Vec::new();
+    for (j, row) in e.rows.iter().enumerate() {
+        series.push(XySeries {
+            label: format!("model, cos θ = {:.2}", row.cos_theta),
+            points: row
+                .slice_model
+                .iter()
+                .enumerate()
+                .map(|(i, v)| (centre(i), mean(*v), 0.0, 0.0))
+                .collect(),
+            line: true,
+            colour: j,
+        });
+        series.push(XySeries {
+            label: format!("reference, cos θ = {:.2}", row.cos_theta),
+            points: row
+                .slice_reference
+                .iter()
+                .enumerate()
+                .map(|(i, r)| {
+                    let (m, se) = (mean(r.mean), mean(r.std_error) / 3f64.sqrt());
+                    (centre(i), m, m - 2.0 * se, m + 2.0 * se)
+                })
+                .collect(),
+            line: false,
+            colour: j,
+        });
+    }
+    XyChart {
+        title: format!(
+            "{} ({}) — BRDF in the plane of incidence",
+            e.material, e.model
+        ),
+        x_label: "θ_o (degrees; positive: mirror side)".into(),
+        y_label: "BRDF (1/sr), mean of RGB".into(),
+        x_range: (-90.0, 90.0),
+        series,
+    }
+}
+
+/// A value read off a run with its whiskers: (value, low, high).
+type RunValue = dyn Fn(&Run) -> Option<(f64, f64, f64)>;
+
+/// The study's runs laid out for category charts: the x categories (the first axis's values),
+/// the series labels (the other axes' values), and each point's (category, series, run).
+struct Layout {
+    x_axis: String,
+    categories: Vec<String>,
+    labels: Vec<String>,
+    placed: Vec<(usize, usize, usize)>,
+}
+
+impl Layout {
+    fn of(results: &Results, meta: &StudyMeta) -> Self {
+        let x_axis = meta
+            .axes
+            .first()
+            .cloned()
+            .unwrap_or_else(|| "variant".into());
+        let mut materials: Vec<&str> = Vec::new();
+        for p in &meta.points {
+            let name = results.runs[p.run].material.as_str();
+            if !materials.contains(&name) {
+                materials.push(name);
+            }
+        }
+        let material_is_swept = meta
+            .axes
+            .iter()
+            .any(|a| a == "material" || a == "active_layers");
+        let mut layout = Self {
+            x_axis,
+            categories: Vec::new(),
+            labels: Vec::new(),
+            placed: Vec::new(),
+        };
+        for p in &meta.points {
+            let mut category = p.coords.first().cloned().unwrap_or_else(|| "base".into());
+            // A material file on the x axis reads as its stem (`divergence/noise.toml` → noise).
+            if layout.x_axis == "material" && category.ends_with(".toml") {
+                if let Some(stem) = Path::new(&category).file_stem() {
+                    category = stem.to_string_lossy().into_owned();
+                }
+            }
+            let mut label_parts: Vec<String> = meta
+                .axes
+                .iter()
+                .zip(&p.coords)
+                .skip(1)
+                .filter(|(axis, _)| axis.as_str() != "material")
+                .map(|(axis, v)| format!("{axis}={v}"))
+                .collect();
+            if materials.len() > 1 && !material_is_swept {
+                label_parts.insert(0, results.runs[p.run].material.clone());
+            }
+            let label = if label_parts.is_empty() {
+                "median".to_string()
+            } else {
+                label_parts.join(", ")
+            };
+            let ci = index_of(&mut layout.categories, category);
+            let si = index_of(&mut layout.labels, label);
+            layout.placed.push((ci, si, p.run));
+        }
+        layout
+    }
+
+    /// One series per label, of `value` read off each placed run.
+    fn series(&self, results: &Results, value: &RunValue) -> Vec<Series> {
+        self.labels
+            .iter()
+            .enumerate()
+            .map(|(si, label)| Series {
+                label: label.clone(),
+                points: self
+                    .placed
+                    .iter()
+                    .filter(|p| p.1 == si)
+                    .filter_map(|&(ci, _, run)| {
+                        value(&results.runs[run]).map(|(v, lo, hi)| (ci, v, lo, hi))
+                    })
+                    .collect(),
+            })
+            .collect()
+    }
+}
+
+/// The index of `item` in `list`, pushed at the end when new.
+fn index_of(list: &mut Vec<String>, item: String) -> usize {
+    match list.iter().position(|c| *c == item) {
+        Some(i) => i,
+        None => {
+            list.push(item);
+            list.len() - 1
+        }
+    }
+}
+
+/// A counted value: no whiskers.
+fn point(x: f64) -> (f64, f64, f64) {
+    (x, x, x)
+}
+
+/// The study's charts: median time (min–max whiskers) per x category, one line per
+/// combination of the other axes; the instruction counts when measured; the baked tables'
+/// errors.
+pub fn charts_of(results: &Results, meta: &StudyMeta) -> Vec<(&'static str, Chart)> {
+    if meta.points.is_empty() {
+        // A `[reference]` study times nothing.
+        return Vec::new();
+    }
+    let layout = Layout::of(results, meta);
+    let baseline = results.runs.iter().find(|r| r.is_baseline());
+    let device = &results.device.name;
+    let mut charts = vec![(
+        "chart-time",
+        Chart {
+            title: format!(
+                "{} — shaded draw, {}x{} {} ({device})",
+                meta.title, results.size[0], results.size[1], results.scene
+            ),
+            x_label: layout.x_axis.clone(),
+            y_label: "GPU time, ms (median; whiskers min–max)".into(),
+            categories: layout.categories.clone(),
+            series: layout.series(results, &|r| Some((r.median_ms, r.min_ms, r.max_ms))),
+            reference: baseline.map(|b| ("ggx baseline".to_string(), b.median_ms)),
+        },
+    )];
+    charts.extend(instructions_chart(results, meta, &layout, baseline));
+    charts.extend(bake_charts(meta));
+    charts
+}
+
+/// JIT instructions per shaded pixel where counted at two sizes, else (studies counted at one
+/// size, before the per-pixel count) the whole draw's; none when not counted.
+fn instructions_chart(
+    results: &Results,
+    meta: &StudyMeta,
+    layout: &Layout,
+    baseline: Option<&Run>,
+) -> Option<(&'static str, Chart)> {
+    if results
+        .runs
+        .iter()
+        .any(|r| r.instructions_per_pixel.is_some())
+    {
+        let sizes = results
+            .counter
+            .as_ref()
+            .map(|c| {
+                let [[a, b], [c, d]] = c.sizes;
+                format!(", {a}x{b} → {c}x{d}")
+            })
+            .unwrap_or_default();
+        return Some((
+            "chart-instructions",
+            Chart {
+                title: format!(
+                    "{} — JIT instructions per shaded pixel, {}{sizes}",
+                    meta.title, results.scene
+                ),
+                x_label: layout.x_axis.clone(),
+                y_label: "JIT instructions per added pixel (callgrind, LP_NUM_THREADS=0)".into(),
+                categories: layout.categories.clone(),
+                series: layout.series(results, &|r| r.instructions_per_pixel.map(point)),
+                reference: baseline
+                    .and_then(|b| b.instructions_per_pixel)
+                    .map(|n| ("ggx baseline".to_string(), n)),
+            },
+        ));
+    }
+    if !results.runs.iter().any(|r| r.instructions.is_some()) {
+        return None;
+    }
+    let size = meta
+        .counter_size
+        .map(|[w, h]| format!("{w}x{h}"))
+        .unwrap_or_default();
+    Some((
+        "chart-instructions",
+        Chart {
+            title: format!(
+                "{} — JIT instructions of the shaded draw, {size}",
+                meta.title
+            ),
+            x_label: layout.x_axis.clone(),
+            y_label: "JIT instructions (callgrind, LP_NUM_THREADS=0)".into(),
+            categories: layout.categories.clone(),
+            series: layout.series(results, &|r| r.instructions.map(|n| point(n as f64))),
+            reference: baseline
+                .and_then(|b| b.instructions)
+                .map(|n| ("ggx baseline".to_string(), n as f64)),
+        },
+    ))
+}
+
+/// The baked tables' largest lobe and image errors per table size, one line per material.
+fn bake_charts(meta: &StudyMeta) -> Vec<(&'static str, Chart)> {
+    let Some(first) = meta.bake_error.first() else {
+        return Vec::new();
+    };
+    let categories: Vec<String> = first.rows.iter().map(|r| r.size.to_string()).collect();
+    let series = |value: fn(&BakeErrorRow) -> f64| {
+        meta.bake_error
+            .iter()
+            .map(|e| Series {
+                label: e.material.clone(),
+                points: e
+                    .rows
+                    .iter()
+                    .enumerate()
+                    .map(|(i, row)| (i, value(row), value(row), value(row)))
+                    .collect(),
+            })
+            .collect()
+    };
+    let bound = Some(("1e-3".to_string(), 1e-3));
+    vec![
+        (
+            "chart-bake-lobes",
+            Chart {
+                title: format!("{} — baked lobes against the model", meta.title),
+                x_label: "table size (samples per lobe)".into(),
+                y_label: "largest lobe error, relative to R".into(),
+                categories: categories.clone(),
+                series: series(|r| r.lobe_error),
+                reference: bound.clone(),
+            },
+        ),
+        (
+            "chart-bake-image",
+            Chart {
+                title: format!(
+                    "{} — baked render against the per-pixel one, {}x{}",
+                    meta.title, first.image_size, first.image_size
+                ),
+                x_label: "table size (samples per lobe)".into(),
+                y_label: "largest relative pixel difference".into(),
+                categories,
+                series: series(|r| r.image_error),
+                reference: bound,
+            },
+        ),
+    ]
+}

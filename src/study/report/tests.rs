@@ -1,0 +1,459 @@
+//! The report's arithmetic, readings, tables and verdicts on small made-up studies.
+
+use std::path::{Path, PathBuf};
+
+use super::ratios::linear_fit;
+use super::reading::reading;
+use super::runs::{executable_stats_table, FLAG_BIT};
+use super::sections::target_verdict;
+use super::*;
+use crate::profile::results::{CounterInfo, DeviceInfo, Results, Run};
+use crate::study::meta::{BakeErrorRow, MaterialBakeError, PointMeta, StudyMeta};
+use crate::study::{Published, Target};
+use crate::variant::VariantKey;
+
+#[test]
+fn a_line_is_fitted_exactly() {
+    let (a, b, r2) = linear_fit(&[(1.0, 3.0), (2.0, 5.0), (4.0, 9.0)]).unwrap();
+    assert!((a - 1.0).abs() < 1e-12 && (b - 2.0).abs() < 1e-12 && (r2 - 1.0).abs() < 1e-12);
+    assert!(linear_fit(&[(1.0, 2.0)]).is_none());
+    let (_, _, r2) = linear_fit(&[(0.0, 0.0), (1.0, 1.0), (2.0, 0.0)]).unwrap();
+    assert!(r2 < 0.5);
+}
+
+fn run(variant: &str, ms: f64, jit: u64, total: u64) -> Run {
+    Run {
+        variant: variant.parse().unwrap(),
+        material: "gold".into(),
+        frames: 3,
+        min_ms: ms,
+        median_ms: ms,
+        mean_ms: ms,
+        max_ms: ms,
+        stdev_ms: 0.0,
+        ratio_to_baseline: 1.0,
+        fragment_invocations: None,
+        pipeline_ms: 0.0,
+        pipeline_cache_hit: None,
+        spirv_bytes: 0,
+        instructions: Some(jit),
+        instructions_total: Some(total),
+        instructions_large: None,
+        instructions_total_large: None,
+        instructions_per_pixel: None,
+        instructions_per_pixel_ratio: None,
+        executable_stats: None,
+        active_layers: None,
+        image_error: None,
+        reference_noise: None,
+        image_error_vs_fp32: None,
+    }
+}
+
+fn published(label: &str, matches: &str, ms: f64) -> Published {
+    Published {
+        label: label.into(),
+        matches: matches.into(),
+        ms,
+        source: None,
+    }
+}
+
+#[test]
+fn the_reading_names_agreement_rebuilds_and_fp16_emulation() {
+    let key = |k: &str| k.parse::<VariantKey>().unwrap().to_string();
+    let tm2 = key("model=tm2,max_layers=2");
+    let study = StudyDir {
+        dir: PathBuf::from("x"),
+        results: Results {
+            device: DeviceInfo {
+                name: "llvmpipe (LLVM 15.0.6, 256 bits)".into(),
+                driver: "llvmpipe Mesa".into(),
+                api_version: "1.3".into(),
+                vendor_id: 0x10005,
+                subgroup_size: None,
+            },
+            git_rev: "0".into(),
+            command: "c".into(),
+            size: [8, 8],
+            lp_num_threads: Some("0".into()),
+            scene: crate::render::scene::Scene::Sphere,
+            counter: None,
+            lighting: None,
+            runs: vec![
+                run(&key("model=ggx"), 1.0, 2_000_000, 8_000_000),
+                // 34 M outside the JIT code against the baseline's 6 M: rebuilt.
+                run(&tm2, 4.0, 3_000_000, 37_000_000),
+                run(
+                    &key("model=tm2,max_layers=2,fp16=on"),
+                    6.0,
+                    3_600_000,
+                    43_000_000,
+                ),
+                run(&key("model=tm6,max_layers=2"), 20.0, 15_000_000, 21_000_000),
+                run(&key("model=tm2,max_layers=4"), 4.4, 6_000_000, 12_000_000),
+            ],
+        },
+        meta: StudyMeta {
+            name: "n".into(),
+            title: "t".into(),
+            description: String::new(),
+            sweep_file: "s".into(),
+            axes: Vec::new(),
+            points: Vec::new(),
+            skipped: Vec::new(),
+            published: vec![
+                published("2-flux", "model=tm2,max_layers=2,fp16=off", 1.0),
+                published("6-flux", "model=tm6", 16.24),
+                published("wide array", "model=tm2,max_layers=4", 1.05),
+            ],
+            fit: false,
+            counter_size: None,
+            counter_sizes: None,
+            targets: Vec::new(),
+            bake_error: Vec::new(),
+            reference: Vec::new(),
+        },
+    };
+    let lines = reading(&study);
+    assert_eq!(lines.len(), 4, "{lines:#?}");
+    assert_eq!(
+        lines[0],
+        "6-flux against 2-flux: the talk 16.24×; ours by time 5.00×, 0.31× the talk's, \
+         by JIT instructions 5.00×, 0.31× the talk's."
+    );
+    assert_eq!(
+        lines[1],
+        "wide array against 2-flux: the talk 1.05×; ours by time 1.10×, agrees, \
+         by JIT instructions 2.00×, 1.90× the talk's."
+    );
+    assert!(
+        lines[2].contains("`model=tm2,max_layers=2` on gold (34.000 M"),
+        "{}",
+        lines[2]
+    );
+    assert!(
+        lines[2].contains("`model=tm2,max_layers=2,fp16=on` on gold"),
+        "{}",
+        lines[2]
+    );
+    assert!(!lines[2].contains("tm6"), "{}", lines[2]);
+    assert!(lines[2].contains("a published figure's run is among them"));
+    assert!(
+        lines[3].contains("runs at 1.50× its `fp16=off` twin's time, 1.20× in JIT"),
+        "{}",
+        lines[3]
+    );
+    let md = render(std::slice::from_ref(&study), Path::new("REPORT.md"));
+    assert!(
+        md.contains(
+            "| [t](#t) | 6-flux | 2-flux | 16.24× | 5.00×, 0.31× the talk's | \
+             5.00×, 0.31× the talk's |"
+        ),
+        "{md}"
+    );
+    assert!(md.contains("- wide array against 2-flux"), "{md}");
+}
+
+#[test]
+fn per_pixel_counts_are_the_main_figure() {
+    let key = |k: &str| k.parse::<VariantKey>().unwrap().to_string();
+    let counted = |variant: &str, jit: u64, per_pixel: f64, ratio: f64| Run {
+        instructions_large: Some(jit * 3),
+        instructions_total_large: Some(jit * 4),
+        instructions_per_pixel: Some(per_pixel),
+        instructions_per_pixel_ratio: Some(ratio),
+        ..run(&key(variant), 1.0, jit, jit * 2)
+    };
+    let study = StudyDir {
+        dir: PathBuf::from("x"),
+        results: Results {
+            device: DeviceInfo {
+                name: "llvmpipe".into(),
+                driver: "llvmpipe Mesa".into(),
+                api_version: "1.3".into(),
+                vendor_id: 0x10005,
+                subgroup_size: None,
+            },
+            git_rev: "0".into(),
+            command: "c".into(),
+            size: [8, 8],
+            lp_num_threads: Some("0".into()),
+            scene: crate::render::scene::Scene::FullScreen,
+            counter: Some(CounterInfo {
+                sizes: [[48, 48], [96, 96]],
+                shaded_pixels: [2304, 9216],
+            }),
+            lighting: None,
+            runs: vec![
+                counted("model=ggx", 1_000_000, 300.0, 1.0),
+                counted("model=tm2,max_layers=4", 5_000_000, 2400.0, 8.0),
+            ],
+        },
+        meta: StudyMeta {
+            name: "n".into(),
+            title: "t".into(),
+            description: String::new(),
+            sweep_file: "s".into(),
+            axes: vec!["model".into()],
+            points: vec![PointMeta {
+                run: 1,
+                coords: vec!["tm2".into()],
+            }],
+            skipped: Vec::new(),
+            published: vec![
+                published("ggx", "model=ggx", 1.0),
+                published("2-flux", "model=tm2", 8.0),
+            ],
+            fit: false,
+            counter_size: Some([48, 48]),
+            counter_sizes: Some([[48, 48], [96, 96]]),
+            targets: Vec::new(),
+            bake_error: Vec::new(),
+            reference: Vec::new(),
+        },
+    };
+    let md = render(std::slice::from_ref(&study), Path::new("REPORT.md"));
+    assert!(
+        md.contains("fullscreen scene, 8x8") && md.contains("at 48x48 and 96x96"),
+        "{md}"
+    );
+    assert!(
+        md.contains(
+            "| model | material | median ms | min–max ms | ×ggx (time) | JIT instr. per \
+             pixel | ×ggx (per pixel) | JIT instructions | ×ggx (JIT instr.) | all \
+             instructions |"
+        ),
+        "{md}"
+    );
+    assert!(
+        md.contains("| tm2 | gold | 1.000 | 1.000–1.000 | 1.00× | 2400.0 | 8.00× | 5.000 M | 5.00× | 10.000 M |"),
+        "{md}"
+    );
+    assert!(
+        md.contains("2-flux against ggx: the talk 8.00×; ours by time 1.00×, 0.12× the talk's, by JIT instructions per pixel 8.00×, agrees."),
+        "{md}"
+    );
+}
+
+/// A study of two materials over the mode: the pivot, the targets (met and missed, by how
+/// much), the per-mode reading, the dilution line and the bake-error table.
+#[test]
+fn targets_pivot_dilution_and_bake_error_are_reported() {
+    let key = |k: &str| k.parse::<VariantKey>().unwrap().to_string();
+    let counted = |variant: &str, material: &str, jit: u64, per_pixel: f64, ratio: f64| Run {
+        material: material.into(),
+        instructions_per_pixel: Some(per_pixel),
+        instructions_per_pixel_ratio: Some(ratio),
+        ..run(&key(variant), 1.0, jit, jit * 2)
+    };
+    let generic = "model=tm2,max_layers=16";
+    let baked = "model=tm2,mode=baked";
+    let runs = vec![
+        counted("model=ggx", "gold", 1_000_000, 300.0, 1.0),
+        counted("model=ggx", "copper", 1_000_000, 300.0, 1.0),
+        counted(generic, "gold", 4_000_000, 3000.0, 10.0),
+        counted(baked, "gold", 1_100_000, 360.0, 1.2),
+        counted(generic, "copper", 3_000_000, 1800.0, 6.0),
+        counted(baked, "copper", 1_500_000, 480.0, 1.6),
+    ];
+    let point = |run: usize, v: &str| PointMeta {
+        run,
+        coords: vec![v.into()],
+    };
+    let target = |label: &str, material: &str| Target {
+        label: label.into(),
+        matches: "mode=baked".into(),
+        against: None,
+        material: material.into(),
+        max: 1.5,
+        tolerance: None,
+    };
+    let study = StudyDir {
+        dir: PathBuf::from("x"),
+        results: Results {
+            device: DeviceInfo {
+                name: "llvmpipe".into(),
+                driver: "llvmpipe Mesa".into(),
+                api_version: "1.3".into(),
+                vendor_id: 0x10005,
+                subgroup_size: None,
+            },
+            git_rev: "0".into(),
+            command: "c".into(),
+            size: [8, 8],
+            lp_num_threads: Some("0".into()),
+            scene: crate::render::scene::Scene::Sphere,
+            counter: Some(CounterInfo {
+                sizes: [[24, 24], [48, 48]],
+                shaded_pixels: [300, 1200],
+            }),
+            lighting: None,
+            runs,
+        },
+        meta: StudyMeta {
+            name: "n".into(),
+            title: "t".into(),
+            description: String::new(),
+            sweep_file: "s".into(),
+            axes: vec!["variant".into()],
+            points: vec![
+                point(2, "generic"),
+                point(3, "baked"),
+                point(4, "generic"),
+                point(5, "baked"),
+            ],
+            skipped: Vec::new(),
+            published: Vec::new(),
+            fit: false,
+            counter_size: Some([24, 24]),
+            counter_sizes: Some([[24, 24], [48, 48]]),
+            targets: vec![
+                target("baked on gold", "gold"),
+                target("baked on copper", "copper"),
+            ],
+            bake_error: vec![MaterialBakeError {
+                material: "gold".into(),
+                variant: baked.parse().unwrap(),
+                image_size: 64,
+                rows: vec![
+                    BakeErrorRow {
+                        size: 32,
+                        lobe_error: 5e-3,
+                        image_error: 2e-2,
+                    },
+                    BakeErrorRow {
+                        size: 256,
+                        lobe_error: 3e-4,
+                        image_error: 8e-4,
+                    },
+                ],
+            }],
+            reference: Vec::new(),
+        },
+    };
+    let md = render(std::slice::from_ref(&study), Path::new("REPORT.md"));
+    for expected in [
+        "| material | generic | baked |",
+        "| gold | 10.00× | 1.20× |",
+        "| copper | 6.00× | 1.60× |",
+        "| baked on gold | `model=tm2,max_layers=4,mode=baked` on gold | `model=ggx,max_layers=4` | 1.20× (JIT instructions per pixel) | ≤ 1.50× | met |",
+        "| 1.60× (JIT instructions per pixel) | ≤ 1.50× | missed by 7 % |",
+        "`generic` 6.00–10.00× (median 10.00×); `baked` 1.20–1.60× (median 1.60×)",
+        "`generic` costs 3.75–8.33× (median 8.33×) `baked` on the same material.",
+        "Whole-draw counts dilute the ratios: a run's whole-draw ×ggx at 24x24 is 0.40–0.94× (median 0.92×) of its per-pixel ×ggx",
+        "| gold | 5.0e-3 / 2.0e-2 | 3.0e-4 / 8.0e-4 |",
+        "| **worst** | 5.0e-3 / 2.0e-2 | 3.0e-4 / 8.0e-4 |",
+        "## Summary: targets",
+    ] {
+        assert!(md.contains(expected), "`{expected}` missing from\n{md}");
+    }
+}
+
+#[test]
+fn links_are_relative_to_the_report() {
+    assert_eq!(
+        relative(
+            Path::new("profiling/results/lavapipe/fp16/chart-time.png"),
+            Path::new("profiling")
+        ),
+        "results/lavapipe/fp16/chart-time.png"
+    );
+    assert_eq!(
+        relative(Path::new("a/b.png"), Path::new("c/d")),
+        "../../a/b.png"
+    );
+}
+
+#[test]
+fn the_stats_table_shows_what_differs_and_strips_the_flag_bit() {
+    let stats = |regs: u64, local: u64| {
+        serde_json::json!([
+            {"name": "VS", "description": "vertex", "statistics": [
+                {"name": "Register Count", "value": 9}]},
+            {"name": "FS", "description": "fragment", "statistics": [
+                {"name": "Register Count", "value": regs},
+                {"name": "Local Memory Size", "value": FLAG_BIT + local},
+                {"name": "Binary Size", "value": 4096}]},
+        ])
+    };
+    let mut a = run("model=tm2,max_layers=4", 1.0, 1, 1);
+    a.executable_stats = Some(stats(115, 896));
+    let mut b = run("model=tm2,max_layers=8", 2.0, 1, 1);
+    b.executable_stats = Some(stats(115, 1792));
+    let rows = vec![(vec!["4".to_string()], &a), (vec!["8".to_string()], &b)];
+    let mut md = String::new();
+    executable_stats_table(&mut md, "max_layers", &rows);
+    assert!(
+        md.contains("| max_layers | material | Local Memory Size |"),
+        "{md}"
+    );
+    assert!(
+        md.contains("| 4 | gold | 896 |") && md.contains("| 8 | gold | 1792 |"),
+        "{md}"
+    );
+    assert!(
+        md.contains("Register Count 115") && md.contains("Binary Size 4096"),
+        "{md}"
+    );
+    assert!(md.contains("without bit 36"), "{md}");
+
+    let mut none = String::new();
+    let plain = run("model=ggx", 1.0, 1, 1);
+    executable_stats_table(&mut none, "model", &[(vec!["ggx".to_string()], &plain)]);
+    assert!(none.is_empty());
+}
+
+#[test]
+fn a_verdict_agrees_with_the_figure_it_prints() {
+    let bound = |max: f64, tolerance: Option<f64>| Target {
+        label: "t".into(),
+        matches: "model=tm2".into(),
+        against: None,
+        material: "gold".into(),
+        max,
+        tolerance,
+    };
+    let counts = "JIT instructions per pixel";
+    // A narrow miss of a count is not rounded to a figure that meets the bound.
+    assert_eq!(
+        target_verdict(1.0004, counts, &bound(1.0, None)),
+        (
+            "1.0004× (JIT instructions per pixel)".to_string(),
+            "missed by 0.04 %".to_string()
+        )
+    );
+    assert_eq!(
+        target_verdict(1.07, counts, &bound(1.0, None)).1,
+        "missed by 7 %"
+    );
+    assert_eq!(target_verdict(1.0, counts, &bound(1.0, None)).1, "met");
+    assert_eq!(
+        target_verdict(1.00003, counts, &bound(1.0, None)),
+        (
+            "1.00003× (JIT instructions per pixel)".to_string(),
+            "missed by 0.003 %".to_string()
+        )
+    );
+    // A count is deterministic: a stated tolerance does not widen its bound.
+    assert_eq!(
+        target_verdict(1.01, counts, &bound(1.0, Some(0.02))).1,
+        "missed by 1 %"
+    );
+    // Times are judged within the stated tolerance, and not at all without one.
+    let time = "median time";
+    assert!(target_verdict(1.0003, time, &bound(1.0, None))
+        .1
+        .starts_with("no verdict"));
+    assert_eq!(
+        target_verdict(1.0003, time, &bound(1.0, Some(0.02))),
+        (
+            "1.0003× (median time)".to_string(),
+            "met within the stated 2 % tolerance".to_string()
+        )
+    );
+    assert_eq!(
+        target_verdict(1.05, time, &bound(1.0, Some(0.02))).1,
+        "missed by 5 %"
+    );
+}
