@@ -98,8 +98,8 @@ enum Command {
     /// `--counter instructions`.
     #[command(hide = true)]
     CountWorker(count_worker::CountWorkerArgs),
-    /// Builds the tables of some variants into the disk cache on every core; started by
-    /// `sweep` on lavapipe pinned to one thread.
+    /// Builds the tables and the SPIR-V of some variants into the disk caches on every core;
+    /// started by `sweep` on lavapipe pinned to one thread, and by the instruction counter.
     #[command(hide = true)]
     TableWorker(table_worker::TableWorkerArgs),
 }

@@ -31,10 +31,12 @@ use crate::render::scene::{Camera, Scene};
 use crate::render::{PassCache, Renderer, ShadedPhase};
 use crate::size::Size;
 use crate::tables::environment::EnvDesc;
+use crate::variant::VariantKey;
 
 use super::bench::place_scene;
 use super::callgrind;
 use super::plan::{Case, Plan};
+use super::prebuild;
 use super::results::{CaseCounts, CounterInfo, Counts};
 
 /// The environment the worker prefilters: small, because the worker runs under valgrind and
@@ -292,15 +294,23 @@ pub struct CountRequest<'a> {
 /// `progress(done, total)` follows the workers. Every case gets a count at every size or the
 /// whole call fails.
 ///
-/// The cases are shared out over one worker per core (each worker runs llvmpipe on one
-/// thread, `LP_NUM_THREADS=0`), side by side: most of a worker's time is llvmpipe compiling
-/// shaders under valgrind, which the count leaves out, so the cases of one shader go to one
-/// worker ([`shader_groups`]). A count does not depend on the worker that takes it (the gate
-/// test counts one case twice).
+/// The cases' tables and SPIR-V are built first natively (`prebuild`): under valgrind each
+/// worker would build them some fifty times slower. The cases are then shared out over one
+/// worker per core (each worker runs llvmpipe on one thread, `LP_NUM_THREADS=0`), side by
+/// side: most of a worker's time is llvmpipe compiling shaders under valgrind, which the
+/// count leaves out, so the cases of one shader go to one worker ([`shader_groups`]). A count
+/// does not depend on the worker that takes it (the gate test counts one case twice).
 pub fn count_instructions(
     request: &CountRequest<'_>,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<Vec<Vec<Counts>>> {
+    let mut variants: Vec<VariantKey> = Vec::new();
+    for case in request.cases {
+        if !variants.contains(&case.variant) {
+            variants.push(case.variant);
+        }
+    }
+    prebuild::run(request.exe, &request.global_args, &variants)?;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let workers = cores.min(request.cases.len()).max(1);
     let shares = shader_groups(request.cases, workers);

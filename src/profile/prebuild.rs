@@ -1,9 +1,11 @@
-//! Tables built before a run on lavapipe pinned to one thread. `LP_NUM_THREADS=0` keeps
-//! lavapipe's timings steady, but it also runs lavapipe's compute dispatches — the table
-//! builds, a cold run's largest cost after the counting (the FGD study's 64⁴ grid: about
-//! 100 s) — on one core. The tables a run's variants sample are built first by
-//! `lamina table-worker`, a child process with lavapipe's default thread count (one per core),
-//! into the disk cache (`cache`) that the run then reads.
+//! Tables and SPIR-V built before a run that would build them slowly: on lavapipe pinned to
+//! one thread, or under valgrind. `LP_NUM_THREADS=0` keeps lavapipe's timings steady, but it
+//! also runs lavapipe's compute dispatches — the table builds, a cold run's largest cost after
+//! the counting (the FGD study's 64⁴ grid: about 100 s) — on one core; under valgrind, the
+//! instruction counter's workers would build every table and run shaderc tens of times slower
+//! than natively. The tables and the SPIR-V of a run's variants are built first by
+//! `lamina table-worker`, a native child process with lavapipe's default thread count (one
+//! per core), into the disk caches (`crate::cache`) that the run then reads.
 
 use std::path::Path;
 use std::process::Command;
@@ -11,6 +13,9 @@ use std::time::{Duration, Instant};
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
+use crate::render::inputs::ShadingInputs;
+use crate::render::{forward, sky};
+use crate::tables::environment::{CONVERT_KERNEL, PREFILTER_KERNEL};
 use crate::variant::VariantKey;
 
 /// Whether a prebuild helps: a CPU device (lavapipe) held by `LP_NUM_THREADS` to fewer
@@ -37,6 +42,26 @@ pub fn table_variants(variants: impl IntoIterator<Item = VariantKey>) -> Vec<Var
         }
     }
     chosen
+}
+
+/// Builds (or loads) the tables `variants` sample into the disk cache, and compiles into the
+/// SPIR-V cache every entry point a frame of theirs runs: the forward pass in each variant,
+/// the sky, the environment's kernels. What `lamina table-worker` runs.
+pub fn prepare(gpu: &Gpu, variants: &[VariantKey]) -> Result<()> {
+    let mut inputs = ShadingInputs::new(gpu)?;
+    for entry in sky::ENTRIES
+        .into_iter()
+        .chain([CONVERT_KERNEL.entry, PREFILTER_KERNEL.entry])
+    {
+        gpu.shaders.compile(entry, &[])?;
+    }
+    for &variant in variants {
+        inputs.prepare(variant)?;
+        for entry in forward::ENTRIES {
+            gpu.shaders.compile(entry, &variant.defines())?;
+        }
+    }
+    Ok(())
 }
 
 /// Runs `exe table-worker` for `variants` with lavapipe's default thread count,

@@ -4,6 +4,9 @@ use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::vk::{Format, GraphicsDesc, Pipeline, PipelineLayout};
 
+/// The sky's entry points.
+pub const ENTRIES: [&str; 2] = ["sky.vert.glsl", "sky.frag.glsl"];
+
 pub struct SkyPass {
     /// Draws 3 vertices, no vertex buffer, with the scene set bound.
     pub pipeline: Pipeline,
@@ -11,8 +14,8 @@ pub struct SkyPass {
 
 impl SkyPass {
     pub fn new(gpu: &Gpu, layout: &PipelineLayout, color_format: Format) -> Result<Self> {
-        let vertex = gpu.shaders.compile("sky.vert.glsl", &[])?;
-        let fragment = gpu.shaders.compile("sky.frag.glsl", &[])?;
+        let vertex = gpu.shaders.compile(ENTRIES[0], &[])?;
+        let fragment = gpu.shaders.compile(ENTRIES[1], &[])?;
         let desc = GraphicsDesc {
             vertex: &vertex,
             fragment: &fragment,

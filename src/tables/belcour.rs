@@ -11,7 +11,20 @@
 //! iteration on XᵀX. The projection interpolates F at μ = 1, [`CT1`] and [`CT2`] (the paper's
 //! nodes, kept so the shader's constants do not depend on the fit).
 
-use crate::model::fresnel;
+use std::path::Path;
+
+use crate::cache;
+use crate::error::{Error, Result};
+use crate::gpu::{ComputeKernel, Gpu};
+use crate::model::{fresnel, microfacet};
+use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_2D};
+use crate::variant::G2;
+use crate::vk::{
+    submit_and_wait, Access, BindingKind, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
+    Resource,
+};
+
+use super::{filter_axis, Texels};
 
 /// Basis samples, uniform in μ ∈ [0, 1] (as the paper's notebook).
 pub const POINTS: usize = 1000;
@@ -191,6 +204,175 @@ fn normalise_max(v: Vec<f64>) -> Vec<f64> {
         .copied()
         .fold(0.0f64, |m, x| if x.abs() > m.abs() { x } else { m });
     v.into_iter().map(|x| x / extreme).collect()
+}
+
+/// The Belcour table: the four integrals L_k per texel (`raw`) and the basis they came from.
+pub struct BelcourTable {
+    pub size: u32,
+    pub samples: u32,
+    pub basis: Basis,
+    /// L0..L3 at μ = (i + ½)/n, √α = (j + ½)/n, row-major (row = √α).
+    pub raw: Vec<[f32; 4]>,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct BelcourPush {
+    size: u32,
+    sample_count: u32,
+    basis_points: u32,
+}
+
+/// `fgd_belcour.comp.glsl`: one invocation per (μ, α) texel.
+pub const BELCOUR_KERNEL: KernelInterface = KernelInterface {
+    entry: "fgd_belcour.comp.glsl",
+    shades: false,
+    bindings: &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
+    push: crate::push_block!(BelcourPush {
+        size,
+        sample_count,
+        basis_points
+    }),
+    local_size: [LOCAL_SIZE_2D, LOCAL_SIZE_2D],
+};
+
+impl BelcourTable {
+    /// From the disk cache when valid, else built on the GPU and stored.
+    pub fn load_or_build(
+        gpu: &Gpu,
+        g2: G2,
+        size: u32,
+        samples: u32,
+        cache_dir: Option<&Path>,
+    ) -> Result<(Self, bool)> {
+        let key = cache::Key {
+            kind: "fgd-belcour",
+            params: vec![size, samples, crate::variant::Axis::code(g2)],
+            shader_hash: crate::shader::entry_hash("fgd_belcour.comp.glsl"),
+        };
+        let basis = Basis::fit();
+        let count = (size * size * 4) as usize;
+        if let Some(values) = cache_dir.and_then(|d| cache::load(d, &key, count)) {
+            let raw = values
+                .chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], c[3]])
+                .collect();
+            return Ok((
+                Self {
+                    size,
+                    samples,
+                    basis,
+                    raw,
+                },
+                true,
+            ));
+        }
+        let table = Self::build(gpu, g2, size, samples, basis)?;
+        if let Some(dir) = cache_dir {
+            let flat: Vec<f32> = table.raw.iter().flatten().copied().collect();
+            let _ = cache::store(dir, &key, &flat);
+        }
+        Ok((table, false))
+    }
+
+    pub fn build(gpu: &Gpu, g2: G2, size: u32, samples: u32, basis: Basis) -> Result<Self> {
+        if !(2..=1024).contains(&size) || samples == 0 {
+            return Err(Error::Unsupported(format!(
+                "Belcour table of {size} texels and {samples} samples: allowed 2..=1024 \
+                 texels and at least 1 sample"
+            )));
+        }
+        let kernel = ComputeKernel::build(gpu, &BELCOUR_KERNEL, &[], &[], KernelSpec::for_g2(g2))?;
+        let device = &gpu.device;
+        let out = Buffer::new(
+            device,
+            BufferDesc::readback(u64::from(size * size) * 16),
+            "belcour texels",
+        )?;
+        let basis_buffer = Buffer::with_data(
+            device,
+            BufferUsageFlags::STORAGE_BUFFER,
+            &basis.to_f32(),
+            "belcour basis",
+        )?;
+        let mut set = DescriptorSet::new(device, &kernel.set_layout, "belcour table")?;
+        set.write(0, Resource::Buffer(&out))
+            .write(1, Resource::Buffer(&basis_buffer));
+        submit_and_wait(device, "belcour table", |rec| {
+            kernel.record_dispatch(
+                rec,
+                &[&set],
+                &BelcourPush {
+                    size,
+                    sample_count: samples,
+                    basis_points: super::belcour::POINTS as u32,
+                },
+                [size, size, 1],
+            );
+            rec.barrier(Access::ComputeWrite, Access::HostRead);
+            Ok(())
+        })?;
+        Ok(Self {
+            size,
+            samples,
+            basis,
+            raw: out.read(),
+        })
+    }
+
+    /// (μ, α) of texel (i, j).
+    pub fn coordinates(&self, i: u32, j: u32) -> (f64, f64) {
+        let n = f64::from(self.size);
+        let r = (f64::from(j) + 0.5) / n;
+        ((f64::from(i) + 0.5) / n, r * r)
+    }
+
+    /// The CPU twin of the shader's lookup of the raw integrals: bilinear at (μ, √α) over the
+    /// texel centres, clamped at the edges.
+    pub fn sample(&self, mu: f64, alpha: f64) -> [f64; 4] {
+        let n = self.size as usize;
+        let (i, fx) = filter_axis(mu, n, Texels::Centred);
+        let (j, fy) = filter_axis(alpha.max(0.0).sqrt(), n, Texels::Centred);
+        let texel = |i: usize, j: usize| self.raw[j * n + i].map(f64::from);
+        let lerp = |a: [f64; 4], b: [f64; 4], t: f64| {
+            let mut out = a;
+            for k in 0..4 {
+                out[k] += (b[k] - a[k]) * t;
+            }
+            out
+        };
+        lerp(
+            lerp(texel(i, j), texel(i + 1, j), fx),
+            lerp(texel(i, j + 1), texel(i + 1, j + 1), fx),
+            fy,
+        )
+    }
+
+    /// The texels with the projection folded in (what the shader samples).
+    pub fn folded(&self) -> Vec<[f32; 4]> {
+        self.raw
+            .iter()
+            .map(|l| {
+                let p = self.basis.fold(l.map(f64::from));
+                p.map(|v| v as f32)
+            })
+            .collect()
+    }
+}
+
+/// L_k(μ, α) for k = 0..3 in f64 by an `n`×`n` midpoint rule over the visible-normal
+/// sampler's uniform variables: the oracle of the Belcour table.
+pub fn belcour_reference(basis: &Basis, mu: f64, alpha: f64, g2: G2, n: u32) -> [f64; 4] {
+    let g1_v = microfacet::masking_g1(g2, mu, alpha);
+    let mut sum = [0.0f64; 4];
+    microfacet::for_each_vndf_sample(mu, alpha, n, |v, h, l| {
+        let w = microfacet::masking_shadowing(g2, mu, l.z, alpha) / g1_v;
+        let c = v.dot(h);
+        for (k, s) in sum.iter_mut().enumerate() {
+            *s += w * basis.at(k, c);
+        }
+    });
+    sum.map(|s| s / f64::from(n * n))
 }
 
 #[cfg(test)]

@@ -300,47 +300,9 @@ pub fn maps_editor(
                         }
                     });
                 if kind == "texture" {
-                    let path = t.get("texture").and_then(Value::as_str).unwrap_or("");
-                    ui.label(RichText::new(path).small());
-                    let mut space = t.get("space").and_then(Value::as_str).unwrap_or("linear");
-                    ui.horizontal(|ui| {
-                        for s in ["linear", "srgb"] {
-                            ui.radio_value(&mut space, s, s);
-                        }
-                    });
-                    t.insert("space".into(), space.into());
-                    if !field.is_rgb() {
-                        let mut channel = t.get("channel").and_then(Value::as_str).unwrap_or("r");
-                        ui.horizontal(|ui| {
-                            ui.label("channel");
-                            for c in ["r", "g", "b", "a"] {
-                                ui.radio_value(&mut channel, c, c);
-                            }
-                        });
-                        t.insert("channel".into(), channel.into());
-                    }
-                    integer_control(ui, &mut t, "scale", (1, i64::from(MAX_SCALE)), 1);
+                    texture_controls(ui, &mut t, field);
                 } else {
-                    integer_control(ui, &mut t, "scale", (1, i64::from(MAX_SCALE)), 4);
-                    if kind == "checker" {
-                        even_scale(&mut t);
-                    } else {
-                        integer_control(ui, &mut t, "seed", (0, 9999), 0);
-                    }
-                    if kind == "noise" {
-                        integer_control(ui, &mut t, "octaves", (1, 8), 4);
-                    }
-                    let mut on = t.contains_key("threshold");
-                    let mut th = t.get("threshold").and_then(Value::as_float).unwrap_or(0.5);
-                    ui.horizontal(|ui| {
-                        ui.checkbox(&mut on, "threshold");
-                        ui.add_enabled(on, Slider::new(&mut th, 0.0..=1.0));
-                    });
-                    if on {
-                        t.insert("threshold".into(), Value::Float(th));
-                    } else {
-                        t.remove("threshold");
-                    }
+                    pattern_controls(ui, &mut t, kind);
                 }
                 let mut screen = t.get("coords").and_then(Value::as_str) == Some("screen");
                 ui.checkbox(&mut screen, "screen coordinates (pixel for pixel)");
@@ -349,40 +311,7 @@ pub fn maps_editor(
                 } else {
                     t.remove("coords");
                 }
-                let range_now = t.get("range").map(Value::to_string).unwrap_or_default();
-                let range = texts
-                    .entry((i, field, TextBox::Range))
-                    .or_insert_with(|| range_now.clone());
-                ui.horizontal(|ui| {
-                    ui.label("range");
-                    let typed = ui.add(egui::TextEdit::singleline(range).desired_width(170.0));
-                    if typed.lost_focus() && *range != range_now {
-                        match range.parse::<toml::Value>().or_else(|_| {
-                            format!("r = {range}")
-                                .parse::<Table>()
-                                .map(|d| d["r"].clone())
-                        }) {
-                            Ok(v) => {
-                                t.insert("range".into(), v);
-                            }
-                            Err(_) => {
-                                t.insert("range".into(), Value::String(range.clone()));
-                            }
-                        }
-                    }
-                });
-                let file = texts.entry((i, field, TextBox::Texture)).or_default();
-                ui.horizontal(|ui| {
-                    ui.label("texture");
-                    ui.add(
-                        egui::TextEdit::singleline(file)
-                            .desired_width(150.0)
-                            .hint_text("a PNG or EXR file"),
-                    );
-                    if ui.button("use").clicked() && !file.is_empty() {
-                        t = as_texture(&t, file, field);
-                    }
-                });
+                text_controls(ui, &mut t, (i, field), texts);
                 if ui.small_button("remove map").clicked() {
                     edit = Some(MapEdit::Remove(field));
                 } else if t != *table {
@@ -406,6 +335,93 @@ pub fn maps_editor(
             });
     }
     edit
+}
+
+/// A texture map's controls: how it decodes, the channel a scalar field reads, the scale.
+fn texture_controls(ui: &mut Ui, t: &mut Table, field: Field) {
+    let path = t.get("texture").and_then(Value::as_str).unwrap_or("");
+    ui.label(RichText::new(path).small());
+    let mut space = t.get("space").and_then(Value::as_str).unwrap_or("linear");
+    ui.horizontal(|ui| {
+        for s in ["linear", "srgb"] {
+            ui.radio_value(&mut space, s, s);
+        }
+    });
+    t.insert("space".into(), space.into());
+    if !field.is_rgb() {
+        let mut channel = t.get("channel").and_then(Value::as_str).unwrap_or("r");
+        ui.horizontal(|ui| {
+            ui.label("channel");
+            for c in ["r", "g", "b", "a"] {
+                ui.radio_value(&mut channel, c, c);
+            }
+        });
+        t.insert("channel".into(), channel.into());
+    }
+    integer_control(ui, t, "scale", (1, i64::from(MAX_SCALE)), 1);
+}
+
+/// A pattern's controls: its scale (even for a checker), seed, octaves and threshold.
+fn pattern_controls(ui: &mut Ui, t: &mut Table, kind: &str) {
+    integer_control(ui, t, "scale", (1, i64::from(MAX_SCALE)), 4);
+    if kind == "checker" {
+        even_scale(t);
+    } else {
+        integer_control(ui, t, "seed", (0, 9999), 0);
+    }
+    if kind == "noise" {
+        integer_control(ui, t, "octaves", (1, 8), 4);
+    }
+    let mut on = t.contains_key("threshold");
+    let mut th = t.get("threshold").and_then(Value::as_float).unwrap_or(0.5);
+    ui.horizontal(|ui| {
+        ui.checkbox(&mut on, "threshold");
+        ui.add_enabled(on, Slider::new(&mut th, 0.0..=1.0));
+    });
+    if on {
+        t.insert("threshold".into(), Value::Float(th));
+    } else {
+        t.remove("threshold");
+    }
+}
+
+/// The typed controls of the map of `field` on layer `i`: its range (applied when the box
+/// loses focus) and a texture file to use instead.
+fn text_controls(ui: &mut Ui, t: &mut Table, (i, field): (usize, Field), texts: &mut MapTexts) {
+    let range_now = t.get("range").map(Value::to_string).unwrap_or_default();
+    let range = texts
+        .entry((i, field, TextBox::Range))
+        .or_insert_with(|| range_now.clone());
+    ui.horizontal(|ui| {
+        ui.label("range");
+        let typed = ui.add(egui::TextEdit::singleline(range).desired_width(170.0));
+        if typed.lost_focus() && *range != range_now {
+            match range.parse::<toml::Value>().or_else(|_| {
+                format!("r = {range}")
+                    .parse::<Table>()
+                    .map(|d| d["r"].clone())
+            }) {
+                Ok(v) => {
+                    t.insert("range".into(), v);
+                }
+                Err(_) => {
+                    t.insert("range".into(), Value::String(range.clone()));
+                }
+            }
+        }
+    });
+    let file = texts.entry((i, field, TextBox::Texture)).or_default();
+    ui.horizontal(|ui| {
+        ui.label("texture");
+        ui.add(
+            egui::TextEdit::singleline(file)
+                .desired_width(150.0)
+                .hint_text("a PNG or EXR file"),
+        );
+        if ui.button("use").clicked() && !file.is_empty() {
+            *t = as_texture(t, file, field);
+        }
+    });
 }
 
 #[cfg(test)]

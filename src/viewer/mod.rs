@@ -12,6 +12,7 @@
 //! `--screenshot FILE --frames N` renders N frames that show the scene, saves the last
 //! swapchain image and exits (tests, documentation).
 
+mod layer_edit;
 mod maps;
 mod panels;
 mod scene;
