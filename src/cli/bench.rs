@@ -1,18 +1,19 @@
 //! `lamina bench`: variants of the shaded draw timed interleaved against the ggx baseline
 //! (`lamina::profile::bench`), optionally with instruction counts; a table, JSON and CSV.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use lamina::imageio;
+use lamina::imageio::{self, HdrImage};
 use lamina::material::Stack;
 use lamina::profile::bench::{self, BenchConfig};
 use lamina::profile::counter::{self, CounterSetup, CounterSizes};
 use lamina::profile::image_error;
 use lamina::profile::plan::{Case, Plan};
+use lamina::profile::results::Results;
 use lamina::render::reference;
 use lamina::render::scene::Scene;
-use lamina::Size;
+use lamina::{Gpu, Size};
 
 use super::args::{CounterArg, EnvArg};
 use super::{
@@ -103,40 +104,10 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
     bar.finish_and_clear();
     check_validation(&gpu)?;
     if let Some(spp) = args.reference_spp {
-        let bar = progress_bar("image error");
-        let (errors, maps) =
-            image_error::measure(&gpu, &equirect, &config, spp, &mut |what, done, total| {
-                bar.set_message(what.to_owned());
-                bar.set_length(total as u64);
-                bar.set_position(done as u64);
-            })?;
-        results.record_image_errors(&errors);
-        bar.finish_and_clear();
-        check_validation(&gpu)?;
-        if let Some(dir) = &args.error_maps {
-            for (run, map) in &maps {
-                let path = dir.join(image_error::error_map_path(*run));
-                imageio::write_png(&path, map.width as usize, map.height as usize, &map.rgba())?;
-            }
-            println!("wrote {} error map(s) under {}", maps.len(), dir.display());
-        }
+        image_errors(&gpu, &equirect, &config, spp, args, &mut results)?;
     }
     if args.counter == Some(CounterArg::Instructions) {
-        let setup = CounterSetup::for_device(&gpu, &env_path)?;
-        let bar = progress_bar("counted (callgrind)");
-        let (info, counts) = counter::count_plans(
-            &[&config.plan],
-            &setup,
-            config.scene,
-            &config.lighting,
-            args.counter_sizes,
-            |done, total| {
-                bar.set_length(total as u64);
-                bar.set_position(done as u64);
-            },
-        )?;
-        results.record_counts(info, &counts[0]);
-        bar.finish_and_clear();
+        count(&gpu, &env_path, &config, args, &mut results)?;
     }
     print!("{}", results.table());
     for run in &results.runs {
@@ -160,5 +131,62 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
         println!("wrote {}", path.display());
     }
     save_pipelines(&gpu);
+    Ok(())
+}
+
+/// Each run's image against the reference (`--reference-spp`), recorded in `results`, and
+/// the error maps written where `--error-maps` asks.
+fn image_errors(
+    gpu: &Gpu,
+    equirect: &HdrImage,
+    config: &BenchConfig,
+    spp: u32,
+    args: &BenchArgs,
+    results: &mut Results,
+) -> Result<()> {
+    let bar = progress_bar("image error");
+    let (errors, maps) =
+        image_error::measure(gpu, equirect, config, spp, &mut |what, done, total| {
+            bar.set_message(what.to_owned());
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        })?;
+    results.record_image_errors(&errors);
+    bar.finish_and_clear();
+    check_validation(gpu)?;
+    if let Some(dir) = &args.error_maps {
+        for (run, map) in &maps {
+            let path = dir.join(image_error::error_map_path(*run));
+            imageio::write_png(&path, map.width as usize, map.height as usize, &map.rgba())?;
+        }
+        println!("wrote {} error map(s) under {}", maps.len(), dir.display());
+    }
+    Ok(())
+}
+
+/// Each run's instructions (`--counter instructions`), counted under callgrind and recorded
+/// in `results`.
+fn count(
+    gpu: &Gpu,
+    env_path: &Path,
+    config: &BenchConfig,
+    args: &BenchArgs,
+    results: &mut Results,
+) -> Result<()> {
+    let setup = CounterSetup::for_device(gpu, env_path)?;
+    let bar = progress_bar("counted (callgrind)");
+    let (info, counts) = counter::count_plans(
+        &[&config.plan],
+        &setup,
+        config.scene,
+        &config.lighting,
+        args.counter_sizes,
+        |done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        },
+    )?;
+    results.record_counts(info, &counts[0]);
+    bar.finish_and_clear();
     Ok(())
 }

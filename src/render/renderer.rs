@@ -20,8 +20,8 @@ use crate::tables::environment::{EnvDesc, Environment};
 use crate::variant::{Mode, Model, VariantKey};
 use crate::vk::{
     submit_and_wait, texel_bytes, Access, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
-    DescriptorSetLayout, Format, GpuProfiler, Image, ImageDesc, ImageState, PipelineLayout,
-    Resource, Sampler, SamplerDesc, ScopeTiming, Stages,
+    DescriptorSetLayout, Format, GpuProfiler, Image, ImageDesc, ImageState, ImageView,
+    PipelineLayout, Resource, Sampler, SamplerDesc, ScopeTiming, Stages,
 };
 
 use super::baked::{self, BakedTable, BakedTexture};
@@ -316,25 +316,7 @@ impl<'g> Renderer<'g> {
         )?;
         let mut profiler = GpuProfiler::new(device, 2, "frame")?;
 
-        submit_and_wait(device, "sky", |rec| {
-            rec.transition(
-                &target,
-                0..1,
-                ImageState::Undefined,
-                ImageState::ColorAttachment,
-            );
-            rec.bind_pipeline(&self.sky.pipeline);
-            rec.bind_set(&self.sky.pipeline, &self.layout, SHADING_SET, &sets.shading);
-            rec.bind_set(&self.sky.pipeline, &self.layout, SCENE_SET, &sets.scene);
-            let scope = profiler
-                .begin(rec, "sky")
-                .expect("first scope of a fresh profiler");
-            rec.begin_rendering(&target_view, width, height, [0.0, 0.0, 0.0, 1.0]);
-            rec.draw(3);
-            rec.end_rendering();
-            profiler.end(rec, scope);
-            Ok(())
-        })?;
+        self.draw_sky(&sets, &target, &target_view, &mut profiler)?;
 
         observe(ShadedPhase::Before);
         submit_and_wait(device, "shaded", |rec| {
@@ -354,18 +336,6 @@ impl<'g> Renderer<'g> {
         })?;
         observe(ShadedPhase::After);
 
-        submit_and_wait(device, "read-back", |rec| {
-            rec.transition(
-                &target,
-                0..1,
-                ImageState::ColorAttachment,
-                ImageState::TransferSrc,
-            );
-            rec.copy_image_to_buffer(&target, 0, &readback);
-            rec.barrier(Access::TransferWrite, Access::HostRead);
-            Ok(())
-        })?;
-
         let mut scopes = profiler.results()?.into_iter();
         let (sky, shaded) = (
             scopes.next().expect("sky scope"),
@@ -374,16 +344,65 @@ impl<'g> Renderer<'g> {
         Ok(RenderedFrame {
             width,
             height,
-            pixels: match self.target {
-                TargetFormat::Half => readback
-                    .read::<[f16; 4]>()
-                    .into_iter()
-                    .map(|p| p.map(f16::to_f32))
-                    .collect(),
-                TargetFormat::Float => readback.read::<[f32; 4]>(),
-            },
+            pixels: self.read_back(&target, &readback)?,
             sky,
             shaded,
+        })
+    }
+
+    /// Records and submits the sky into `target` (cleared first), timed in `profiler`'s
+    /// first scope.
+    fn draw_sky(
+        &self,
+        sets: &FrameSets,
+        target: &Image,
+        target_view: &ImageView,
+        profiler: &mut GpuProfiler,
+    ) -> Result<()> {
+        let (width, height, _) = target.desc.mip_extent(0);
+        submit_and_wait(&self.gpu.device, "sky", |rec| {
+            rec.transition(
+                target,
+                0..1,
+                ImageState::Undefined,
+                ImageState::ColorAttachment,
+            );
+            rec.bind_pipeline(&self.sky.pipeline);
+            rec.bind_set(&self.sky.pipeline, &self.layout, SHADING_SET, &sets.shading);
+            rec.bind_set(&self.sky.pipeline, &self.layout, SCENE_SET, &sets.scene);
+            let scope = profiler
+                .begin(rec, "sky")
+                .expect("first scope of a fresh profiler");
+            rec.begin_rendering(target_view, width, height, [0.0, 0.0, 0.0, 1.0]);
+            rec.draw(3);
+            rec.end_rendering();
+            profiler.end(rec, scope);
+            Ok(())
+        })?;
+        Ok(())
+    }
+
+    /// Copies the drawn `target` into `readback` and returns its texels as f32 (a half-float
+    /// target's values, widened exactly).
+    fn read_back(&self, target: &Image, readback: &Buffer) -> Result<Vec<[f32; 4]>> {
+        submit_and_wait(&self.gpu.device, "read-back", |rec| {
+            rec.transition(
+                target,
+                0..1,
+                ImageState::ColorAttachment,
+                ImageState::TransferSrc,
+            );
+            rec.copy_image_to_buffer(target, 0, readback);
+            rec.barrier(Access::TransferWrite, Access::HostRead);
+            Ok(())
+        })?;
+        Ok(match self.target {
+            TargetFormat::Half => readback
+                .read::<[f16; 4]>()
+                .into_iter()
+                .map(|p| p.map(f16::to_f32))
+                .collect(),
+            TargetFormat::Float => readback.read::<[f32; 4]>(),
         })
     }
 

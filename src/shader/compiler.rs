@@ -219,16 +219,23 @@ fn codes_glsl() -> String {
     ] {
         out.push_str(&format!("#define {name} {value:e}\n"));
     }
-    // `tir=fit`'s coefficients (model::tir_fit, written by `lamina tables tir-fit`).
+    out.push_str(&arrays_glsl());
+    out.push_str("#endif\n");
+    out
+}
+
+/// The constant arrays of `codes.glsl`: `tir=fit`'s coefficients (model::tir_fit, written by
+/// `lamina tables tir-fit`) and the Gauss–Legendre rule of the hemispherical Fresnel averages
+/// (model::diffuse), over s = √μ on [0, 1].
+fn arrays_glsl() -> String {
     let fit = crate::model::tir_fit::COEFFICIENTS;
+    let mut out = String::new();
     out.push_str(&format!(
         "const float TIR_FIT_COEFFICIENTS[{}] = float[{}]({});\n",
         fit.len(),
         fit.len(),
         fit.map(|c| format!("{c:e}")).join(", ")
     ));
-    // The Gauss–Legendre rule of the hemispherical Fresnel averages (model::diffuse), over
-    // s = √μ on [0, 1].
     let rule = crate::model::diffuse::gauss_legendre_unit(crate::model::diffuse::HEMISPHERE_POINTS);
     let list = |f: &dyn Fn(&(f64, f64)) -> f64| {
         rule.iter()
@@ -246,7 +253,6 @@ fn codes_glsl() -> String {
         "const float HEMISPHERE_W[{n}] = float[{n}]({});\n",
         list(&|p| p.1)
     ));
-    out.push_str("#endif\n");
     out
 }
 

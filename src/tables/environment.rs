@@ -112,27 +112,9 @@ impl Environment {
         let equirect_sampler = Sampler::new(device, SamplerDesc::equirect(), "equirect")?;
         let cube_sampler = Sampler::new(device, SamplerDesc::linear_clamp(), "cube source")?;
 
-        let storage_usage = ImageUsageFlags::STORAGE
-            | ImageUsageFlags::SAMPLED
-            | ImageUsageFlags::TRANSFER_SRC
-            | ImageUsageFlags::TRANSFER_DST;
-        let source = Image::new(
-            device,
-            ImageDesc::new_cube(Format::R16G16B16A16_SFLOAT, size)
-                .all_mips()
-                .usage(storage_usage),
-            "environment source cube",
-        )?;
+        let (source, cube) = cubes(gpu, desc)?;
         let source_view = source.view("environment source cube")?;
         let source_mip0 = source.mip_view(0, "environment source mip 0")?;
-        let cube = Image::new(
-            device,
-            ImageDesc::new_cube(Format::R16G16B16A16_SFLOAT, size)
-                .mips(desc.mip_count)
-                .usage(storage_usage),
-            "environment prefiltered cube",
-        )?;
-
         let convert = ComputeKernel::build(gpu, &CONVERT_KERNEL, &[], &[], KernelSpec::default())?;
         let mut convert_set = DescriptorSet::new(device, &convert.set_layout, "equirect to cube")?;
         convert_set
@@ -198,6 +180,27 @@ impl Environment {
             .map(|c| [c[0].to_f32(), c[1].to_f32(), c[2].to_f32(), c[3].to_f32()])
             .collect())
     }
+}
+
+/// The source cube (every mip, mip 0 converted from the map, the others blitted down) and the
+/// prefiltered cube (`desc.mip_count` mips) of a `desc.face_size` environment.
+fn cubes(gpu: &Gpu, desc: EnvDesc) -> Result<(Image, Image)> {
+    let usage = ImageUsageFlags::STORAGE
+        | ImageUsageFlags::SAMPLED
+        | ImageUsageFlags::TRANSFER_SRC
+        | ImageUsageFlags::TRANSFER_DST;
+    let cube = |mips: Option<u32>, name: &str| {
+        let desc = ImageDesc::new_cube(Format::R16G16B16A16_SFLOAT, desc.face_size);
+        let desc = match mips {
+            Some(n) => desc.mips(n),
+            None => desc.all_mips(),
+        };
+        Image::new(&gpu.device, desc.usage(usage), name)
+    };
+    Ok((
+        cube(None, "environment source cube")?,
+        cube(Some(desc.mip_count), "environment prefiltered cube")?,
+    ))
 }
 
 /// The equirectangular map as a half-float 2-D image the conversion samples.

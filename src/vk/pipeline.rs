@@ -248,30 +248,8 @@ impl Pipeline {
                 .name(c"main")
                 .specialization_info(&spec_info)
         });
-        let bindings = [vk::VertexInputBindingDescription {
-            binding: 0,
-            stride: desc.vertex_stride,
-            input_rate: vk::VertexInputRate::VERTEX,
-        }];
-        let attributes: Vec<_> = desc
-            .attributes
-            .iter()
-            .map(
-                |&(location, format, offset)| vk::VertexInputAttributeDescription {
-                    location,
-                    binding: 0,
-                    format,
-                    offset,
-                },
-            )
-            .collect();
-        let vertex_input = if desc.vertex_stride > 0 {
-            vk::PipelineVertexInputStateCreateInfo::default()
-                .vertex_binding_descriptions(&bindings)
-                .vertex_attribute_descriptions(&attributes)
-        } else {
-            vk::PipelineVertexInputStateCreateInfo::default()
-        };
+        let vertex_input = VertexInput::new(desc);
+        let vertex_state = vertex_input.info();
         let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
             .color_write_mask(vk::ColorComponentFlags::RGBA)];
         let blend =
@@ -289,7 +267,7 @@ impl Pipeline {
             |feedback| {
                 let info = vk::GraphicsPipelineCreateInfo::default()
                     .stages(&stages)
-                    .vertex_input_state(&vertex_input)
+                    .vertex_input_state(&vertex_state)
                     .input_assembly_state(&fixed.input_assembly)
                     .viewport_state(&fixed.viewport)
                     .rasterization_state(&fixed.raster)
@@ -339,6 +317,47 @@ impl Pipeline {
             bind_point,
             creation,
         })
+    }
+}
+
+/// A graphics pipeline's vertex input: one interleaved buffer of `desc.vertex_stride` bytes per
+/// vertex with its attributes, or none (a stride of 0: the vertex shader makes its vertices).
+struct VertexInput {
+    bindings: [vk::VertexInputBindingDescription; 1],
+    attributes: Vec<vk::VertexInputAttributeDescription>,
+}
+
+impl VertexInput {
+    fn new(desc: &GraphicsDesc<'_>) -> Self {
+        Self {
+            bindings: [vk::VertexInputBindingDescription {
+                binding: 0,
+                stride: desc.vertex_stride,
+                input_rate: vk::VertexInputRate::VERTEX,
+            }],
+            attributes: desc
+                .attributes
+                .iter()
+                .map(
+                    |&(location, format, offset)| vk::VertexInputAttributeDescription {
+                        location,
+                        binding: 0,
+                        format,
+                        offset,
+                    },
+                )
+                .collect(),
+        }
+    }
+
+    fn info(&self) -> vk::PipelineVertexInputStateCreateInfo<'_> {
+        if self.bindings[0].stride > 0 {
+            vk::PipelineVertexInputStateCreateInfo::default()
+                .vertex_binding_descriptions(&self.bindings)
+                .vertex_attribute_descriptions(&self.attributes)
+        } else {
+            vk::PipelineVertexInputStateCreateInfo::default()
+        }
     }
 }
 
