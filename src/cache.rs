@@ -91,6 +91,45 @@ pub fn load(dir: &Path, key: &Key, count: usize) -> Option<Vec<f32>> {
     )
 }
 
+/// The values of `key`: from `dir` when a valid file for `count` values is there (`true`),
+/// else made by `build` and stored there (`false`). One builder at a time: a thread or
+/// process that finds the table missing while another builds it waits for that build
+/// (an exclusive lock on `KEY.lock` beside the file) and loads its result. Without a `dir`,
+/// `build` runs.
+pub fn load_or_build(
+    dir: Option<&Path>,
+    key: &Key,
+    count: usize,
+    build: impl FnOnce() -> crate::error::Result<Vec<f32>>,
+) -> crate::error::Result<(Vec<f32>, bool)> {
+    let Some(dir) = dir else {
+        return Ok((build()?, false));
+    };
+    if let Some(values) = load(dir, key, count) {
+        return Ok((values, true));
+    }
+    // A lock that cannot be taken (no directory, a read-only one) only loses the sharing.
+    let _lock = build_lock(dir, key);
+    if let Some(values) = load(dir, key, count) {
+        return Ok((values, true));
+    }
+    let values = build()?;
+    // A cache that cannot be written costs a rebuild next time, nothing more.
+    let _ = store(dir, key, &values);
+    Ok((values, false))
+}
+
+/// An exclusive lock on `key`'s lock file in `dir`, held until dropped; `None` where it
+/// cannot be made.
+fn build_lock(dir: &Path, key: &Key) -> Option<std::fs::File> {
+    std::fs::create_dir_all(dir).ok()?;
+    let mut name = key.file_name();
+    name.push_str(".lock");
+    let file = std::fs::File::create(dir.join(name)).ok()?;
+    file.lock().ok()?;
+    Some(file)
+}
+
 /// Stores `values` under `key` (atomically); a failure to write only costs a rebuild later,
 /// so it is reported to the caller and may be ignored.
 pub fn store(dir: &Path, key: &Key, values: &[f32]) -> crate::error::Result<PathBuf> {
@@ -121,10 +160,12 @@ fn remove_stale(dir: &Path, key: &Key) {
     };
     for entry in entries.flatten() {
         let name = entry.file_name().to_string_lossy().into_owned();
-        let hash = name
-            .strip_prefix(prefix)
-            .and_then(|rest| rest.strip_suffix(".bin"));
-        if name != current
+        // Other versions' tables and the lock files of their builds.
+        let hash = name.strip_prefix(prefix).and_then(|rest| {
+            rest.strip_suffix(".bin")
+                .or_else(|| rest.strip_suffix(".bin.lock"))
+        });
+        if !name.starts_with(&current)
             && hash.is_some_and(|h| h.len() == 16 && h.bytes().all(|b| b.is_ascii_hexdigit()))
         {
             let _ = std::fs::remove_file(entry.path());
@@ -163,6 +204,39 @@ mod tests {
             Some(vec![2.0]),
             "other parameters stay"
         );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Two builders of one missing table: the second waits for the first's build and loads it.
+    #[test]
+    fn a_table_is_built_once_by_concurrent_builders() {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let dir = std::env::temp_dir().join(format!("lamina-cache-lock-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let key = Key {
+            kind: "locked",
+            params: vec![4],
+            shader_hash: 7,
+        };
+        let builds = AtomicUsize::new(0);
+        let outcomes: Vec<(Vec<f32>, bool)> = std::thread::scope(|scope| {
+            let handles: Vec<_> = (0..2)
+                .map(|_| {
+                    scope.spawn(|| {
+                        load_or_build(Some(&dir), &key, 4, || {
+                            builds.fetch_add(1, Ordering::SeqCst);
+                            std::thread::sleep(std::time::Duration::from_millis(200));
+                            Ok(vec![1.0, 2.0, 3.0, 4.0])
+                        })
+                        .unwrap()
+                    })
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+        assert_eq!(builds.load(Ordering::SeqCst), 1, "built twice");
+        assert!(outcomes.iter().all(|(v, _)| *v == [1.0, 2.0, 3.0, 4.0]));
+        assert_eq!(outcomes.iter().filter(|(_, cached)| *cached).count(), 1);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -1,5 +1,5 @@
 //! Random material stacks over the whole documented parameter space, for the property tests of
-//! the f64 model (`properties.rs`) and of the GPU (tests/model_vs_cpu.rs): every field inside
+//! the f64 model (`properties.rs`) and of the GPU (tests/suite/model_vs_cpu.rs): every field inside
 //! the material format's ranges (`material/mod.rs`), the range ends and the awkward values hit
 //! often — α 0 and 1, relative η at, next to and far from 1 on both sides, κ up to 200, depth
 //! up to 100, σ up to 1000, g near ±1, view cosines 1e-4 (the renderer's clamp of n·v) and 1.

@@ -11,7 +11,7 @@
 //!   E(μ_v; α) = ∫ D G2 / (4 μ_l μ_v) μ_l dω_l,
 //!
 //! so that ∫ f_k μ_l dω_l = e_k exactly: the lobe's light response carries the energy the
-//! model computed, and no more (the white furnace of `tests/lights.rs`). E is the albedo of a
+//! model computed, and no more (the white furnace of `tests/suite/lights.rs`). E is the albedo of a
 //! white GGX lobe — the A + B of Karis 2013's split sum ("Real Shading in Unreal Engine 4") —
 //! with the variant's G2, which the shaders read from a table (`tables::lobe_albedo`). D is
 //! the `ndf` axis's form, G2 the `g2` axis's.

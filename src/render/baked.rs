@@ -29,7 +29,7 @@ use super::{PassKey, Renderer, TargetFormat};
 /// study ([`STUDY_SIZES`]) whose largest lobe and image errors over the presets are both
 /// within 1e-3 — at 512, 4.2e-4 and 3.9e-4; at 256, 1.35e-3 (`lacquered-copper`'s lobes) and
 /// 2.2e-3 (`varnished-gold`'s image). `lamina sweep profiling/sweeps/specialization.toml`
-/// tabulates them; `cargo test --test specialized baked -- --nocapture` prints the lobes. The
+/// tabulates them; `cargo test --test suite specialized::baked -- --nocapture` prints the lobes. The
 /// errors come from the model's kinks near grazing (the FGD table's first texel, a lobe's α
 /// reaching 1 near μ = 0.07), so they fall unevenly with the size: where a kink falls inside
 /// a table interval decides. The image is the more sensitive there: at the α = 1 kink a

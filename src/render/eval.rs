@@ -22,7 +22,7 @@ use super::pass::PassKey;
 /// CPU twins: `tables::fgd::FgdLookup`, `tables::tir::provider`), as absolute differences of
 /// the energies (R, T, lobe weights; all in [0, 1]) and of the HG g of lobes that carry at
 /// least 1 % of the light (their GGX α mapped back to g, hg::g_of_alpha: α(g) is steep near
-/// α = 1). tests/model_vs_cpu.rs holds them over random valid stacks (range
+/// α = 1). tests/suite/model_vs_cpu.rs holds them over random valid stacks (range
 /// ends, grazing angles, thick media, TIR traps) in every variant.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tolerance {

@@ -1,5 +1,5 @@
 //! The host side of the GLSL interface: the structs mirrored in `glsl/include/shared/` (size
-//! and offsets asserted here, and compared with the compiled blocks by tests/reflection.rs) and
+//! and offsets asserted here, and compared with the compiled blocks by tests/suite/reflection.rs) and
 //! the descriptor sets declared in `glsl/include/bindings/`, with the layout of the shading set
 //! that every entry point evaluating the model binds as set 0.
 

@@ -2,7 +2,7 @@
 //! it: its own descriptor bindings, its push-constant block (size and member offsets), its
 //! work-group size and whether it shades (binds the shading set as set 0). The host creates
 //! the pipeline from it (`gpu::ComputeKernel::build`), sizes dispatches by it, and
-//! tests/reflection.rs compares it with what the SPIR-V declares.
+//! tests/suite/reflection.rs compares it with what the SPIR-V declares.
 //!
 //! Work-group sizes reach the shaders as specialization constants: [`KernelSpec`] for the
 //! table and utility kernels (`glsl/include/shared/kernel.glsl`), `ShadeSpec::local_size_x`
@@ -150,7 +150,7 @@ pub const LOCAL_SIZE_2D: u32 = 8;
 pub const LOCAL_SIZE_1D: u32 = 64;
 
 /// `spec_array.comp.glsl`: the test that a MAX_LAYERS-sized array has that size on the device
-/// (tests/spec_array.rs).
+/// (tests/suite/spec_array.rs).
 pub const SPEC_ARRAY: KernelInterface = KernelInterface {
     entry: "spec_array.comp.glsl",
     shades: false,

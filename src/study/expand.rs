@@ -221,7 +221,7 @@ fn measuring(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Measuri
         Some(tile) => tile,
         None => 1,
     };
-    let fits = |size: &Size| size.width % tile == 0;
+    let fits = |size: &Size| size.width.is_multiple_of(tile);
     let own_size = parse_size(file, "size", sweep.size.as_deref().unwrap_or(DEFAULT_SIZE))?;
     if !fits(&own_size) {
         return Err(bad(
@@ -285,8 +285,9 @@ fn counter(
     over: &Overrides,
     tile: u32,
 ) -> Result<(Option<CounterSizes>, CounterSizes)> {
-    let fits =
-        |sizes: &CounterSizes| sizes.small.width % tile == 0 && sizes.large.width % tile == 0;
+    let fits = |sizes: &CounterSizes| {
+        sizes.small.width.is_multiple_of(tile) && sizes.large.width.is_multiple_of(tile)
+    };
     let own = match &sweep.counter_sizes {
         Some(sizes) => parse_counter_sizes(file, sizes)?,
         None => CounterSizes::DEFAULT,

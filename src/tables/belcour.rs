@@ -36,6 +36,7 @@ pub const TRAINING_DIELECTRICS: usize = 297;
 /// Gulbrandsen reflectivities of the conductor curves (edge tint 1).
 const TRAINING_CONDUCTORS: [f64; 3] = [0.5, 0.7, 0.9];
 
+#[derive(Clone)]
 pub struct Basis {
     /// b1, b2, b3 at μ = i/(POINTS − 1).
     pub values: [Vec<f64>; 3],
@@ -252,27 +253,23 @@ impl BelcourTable {
         };
         let basis = Basis::fit();
         let count = (size * size * 4) as usize;
-        if let Some(values) = cache_dir.and_then(|d| cache::load(d, &key, count)) {
-            let raw = values
-                .chunks_exact(4)
-                .map(|c| [c[0], c[1], c[2], c[3]])
-                .collect();
-            return Ok((
-                Self {
-                    size,
-                    samples,
-                    basis,
-                    raw,
-                },
-                true,
-            ));
-        }
-        let table = Self::build(gpu, g2, size, samples, basis)?;
-        if let Some(dir) = cache_dir {
-            let flat: Vec<f32> = table.raw.iter().flatten().copied().collect();
-            let _ = cache::store(dir, &key, &flat);
-        }
-        Ok((table, false))
+        let (values, cached) = cache::load_or_build(cache_dir, &key, count, || {
+            let table = Self::build(gpu, g2, size, samples, basis.clone())?;
+            Ok(table.raw.iter().flatten().copied().collect())
+        })?;
+        let raw = values
+            .chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect();
+        Ok((
+            Self {
+                size,
+                samples,
+                basis,
+                raw,
+            },
+            cached,
+        ))
     }
 
     pub fn build(gpu: &Gpu, g2: G2, size: u32, samples: u32, basis: Basis) -> Result<Self> {

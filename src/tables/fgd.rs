@@ -36,7 +36,7 @@ use crate::vk::{
 /// reference's 64).
 pub const SIZE: u32 = FGD_GRID_SIZE;
 /// Hammersley samples per texel of the 4-D and η < 1 grids: they resolve the step of F at
-/// the critical angle (η < 1) to ~5e-4 (256 samples: 5e-3; tests/fgd.rs). The build shader
+/// the critical angle (η < 1) to ~5e-4 (256 samples: 5e-3; tests/suite/fgd.rs). The build shader
 /// holds at most 1024 in shared memory.
 pub const GRID_SAMPLES: u32 = 1024;
 /// Samples per texel of the Belcour table (64² texels: cheap).
@@ -170,22 +170,17 @@ pub fn load_or_build_grid(
     let dims = kind.dims(n);
     let (eta, kappa) = kind.ranges();
     let count = dims.iter().map(|&d| d as usize).product();
-    if let Some(texels) = cache_dir.and_then(|d| cache::load(d, &key, count)) {
-        let grid = Grid {
-            dims,
-            eta,
-            kappa,
-            samples,
-            texels,
-        };
-        return Ok((grid, true));
-    }
-    let grid = build_grid(gpu, kind, g2, n, samples, progress)?;
-    if let Some(dir) = cache_dir {
-        // A cache that cannot be written costs a rebuild next time, nothing more.
-        let _ = cache::store(dir, &key, &grid.texels);
-    }
-    Ok((grid, false))
+    let (texels, cached) = cache::load_or_build(cache_dir, &key, count, || {
+        Ok(build_grid(gpu, kind, g2, n, samples, progress)?.texels)
+    })?;
+    let grid = Grid {
+        dims,
+        eta,
+        kappa,
+        samples,
+        texels,
+    };
+    Ok((grid, cached))
 }
 
 /// Builds a grid on the GPU (no cache).

@@ -47,20 +47,8 @@ impl LobeAlbedoTable {
         };
         let dir = crate::cache::tables_dir();
         let count = (SIZE * SIZE) as usize;
-        let texels = match dir
-            .as_deref()
-            .and_then(|d| crate::cache::load(d, &key, count))
-        {
-            Some(texels) => texels,
-            None => {
-                let texels = compute(g2, SIZE);
-                if let Some(dir) = dir {
-                    // A cache that cannot be written costs a rebuild next time, nothing more.
-                    let _ = crate::cache::store(&dir, &key, &texels);
-                }
-                texels
-            }
-        };
+        let (texels, _) =
+            crate::cache::load_or_build(dir.as_deref(), &key, count, || Ok(compute(g2, SIZE)))?;
         let image = Image::new(
             &gpu.device,
             ImageDesc::new_2d(Format::R32_SFLOAT, SIZE, SIZE),

@@ -59,20 +59,12 @@ impl SplitSumTable {
         };
         let dir = crate::cache::tables_dir();
         let count = (size * size * 2) as usize;
-        if let Some(values) = dir
-            .as_deref()
-            .and_then(|d| crate::cache::load(d, &key, count))
-        {
-            let texels = values.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
-            return Self::from_texels(gpu, size, texels);
-        }
-        let table = Self::build(gpu, g2, size, samples)?;
-        if let Some(dir) = dir {
-            let flat: Vec<f32> = table.texels.iter().flatten().copied().collect();
-            // A cache that cannot be written costs a rebuild next time, nothing more.
-            let _ = crate::cache::store(&dir, &key, &flat);
-        }
-        Ok(table)
+        let (values, _) = crate::cache::load_or_build(dir.as_deref(), &key, count, || {
+            let table = Self::build(gpu, g2, size, samples)?;
+            Ok(table.texels.iter().flatten().copied().collect())
+        })?;
+        let texels = values.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
+        Self::from_texels(gpu, size, texels)
     }
 
     pub fn build(gpu: &Gpu, g2: G2, size: u32, samples: u32) -> Result<Self> {

@@ -26,7 +26,7 @@ use crate::vk::{
 
 /// The size the shaders sample ([`TIR_TABLE_SIZE`]: 64³, the size of the reference's table).
 pub const DEFAULT_SIZE: u32 = TIR_TABLE_SIZE;
-/// Hammersley samples per texel; the estimate is within ~2e-3 of the integral (tests/tables.rs).
+/// Hammersley samples per texel; the estimate is within ~2e-3 of the integral (tests/suite/tables.rs).
 pub const DEFAULT_SAMPLES: u32 = 1024;
 /// Sampled by the shaders, uploaded, and read back by the tests.
 const TABLE_USAGE: ImageUsageFlags = ImageUsageFlags::from_raw(
@@ -84,15 +84,10 @@ impl TirTable {
     ) -> Result<(Self, bool)> {
         let key = cache_key(size, samples);
         let count = (size as usize).pow(3);
-        if let Some(texels) = cache_dir.and_then(|d| cache::load(d, &key, count)) {
-            return Ok((Self::from_texels(gpu, size, samples, texels)?, true));
-        }
-        let table = Self::build(gpu, size, samples, progress)?;
-        if let Some(dir) = cache_dir {
-            // A cache that cannot be written costs a rebuild next time, nothing more.
-            let _ = cache::store(dir, &key, &table.texels);
-        }
-        Ok((table, false))
+        let (texels, cached) = cache::load_or_build(cache_dir, &key, count, || {
+            Ok(Self::build(gpu, size, samples, progress)?.texels)
+        })?;
+        Ok((Self::from_texels(gpu, size, samples, texels)?, cached))
     }
 
     /// Builds the table on the GPU (no cache).

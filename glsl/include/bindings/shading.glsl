@@ -1,5 +1,5 @@
 // Set 0 of every entry point that evaluates the model: the layer stack and the tables the
-// variant samples. Mirrors SHADING_BINDINGS in src/render/inputs.rs (tests/reflection.rs
+// variant samples. Mirrors SHADING_BINDINGS in src/render/inputs.rs (tests/suite/reflection.rs
 // compares the compiled SPIR-V with it). The material is a storage buffer: lavapipe inlines
 // uniform-buffer values into the shader and recompiles it per material (inputs.rs).
 #ifndef LAMINA_BINDINGS_SHADING

@@ -1,6 +1,6 @@
-// The layer stack as the shaders read it. Mirrors `MaterialGpu` in src/render/material.rs
+// The layer stack as the shaders read it. Mirrors `MaterialGpu` in src/shader/interface.rs
 // (std430, which lays these vec4s out as std140 would; the Rust side asserts size and offsets,
-// tests/reflection.rs compares them with the compiled block). The array has the host's fixed maximum;
+// tests/suite/reflection.rs compares them with the compiled block). The array has the host's fixed maximum;
 // the shading loops run over `info.x` layers into function-local arrays sized by MAX_LAYERS.
 #ifndef LAMINA_SHARED_MATERIAL
 #define LAMINA_SHARED_MATERIAL

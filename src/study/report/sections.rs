@@ -312,7 +312,7 @@ pub(super) fn reference_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
             n += 1;
             within += usize::from(error.abs() < 0.1);
             within_no_tir += usize::from(row.relative_error_no_tir().abs() < 0.1);
-            if worst.map_or(true, |w| error.abs() > w.0.abs()) {
+            if worst.is_none_or(|w| error.abs() > w.0.abs()) {
                 worst = Some((error, &e.material, row.cos_theta));
             }
         }

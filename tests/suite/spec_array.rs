@@ -1,7 +1,7 @@
 //! A function-local array sized by the `max_layers` specialization constant has exactly that
 //! size on the device.
 
-mod common;
+use crate::common;
 
 use lamina::gpu::ComputeKernel;
 use lamina::shader::kernel;

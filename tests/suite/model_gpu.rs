@@ -1,6 +1,6 @@
 //! The transfer-matrix shaders on the GPU: identities that need no CPU oracle.
 
-mod common;
+use crate::common;
 
 use lamina::model::LayerParams;
 use lamina::render::eval::GpuEvaluator;

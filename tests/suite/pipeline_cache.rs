@@ -6,7 +6,7 @@
 //! feedback that never says "hit": there, the tests check that the saved data is loaded back;
 //! on drivers that keep pipelines in the data they also check that the second build is a hit.
 
-mod common;
+use crate::common;
 
 use lamina::gpu::ComputeKernel;
 use lamina::pipeline_cache::{decode, encode, file_name, Origin};

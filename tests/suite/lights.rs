@@ -2,7 +2,7 @@
 //! (`model::light`), the white furnace over the hemisphere of light directions, and the axes
 //! (ndf, g2) that only a light makes visible.
 
-mod common;
+use crate::common;
 
 use glam::DVec3;
 use lamina::material::Stack;

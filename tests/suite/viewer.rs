@@ -2,7 +2,7 @@
 //! recreates the swapchain, and a saved stack that loads back unchanged — all with the
 //! validation layer on.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::{Command, Output};

@@ -1,7 +1,7 @@
 //! The FGD tables (issue #6): GPU values against the f64 references, the resampled table's
 //! index arithmetic as the shader samples it, and the disk cache of the grids.
 
-mod common;
+use crate::common;
 
 use lamina::model::fgd::ExactFgd;
 use lamina::model::{fresnel, Fgd as _};

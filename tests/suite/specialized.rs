@@ -5,7 +5,7 @@
 //! TIR traps, media and none, with and without a conductor), at 256 view cosines from grazing to
 //! normal; and a baked table's lobes against the model between its samples.
 
-mod common;
+use crate::common;
 
 use lamina::material::{presets, Stack};
 use lamina::model::{hg, Evaluation, LayerParams};

@@ -1,6 +1,6 @@
 //! The default render and the GPU queries around it.
 
-mod common;
+use crate::common;
 
 use glam::Vec3;
 use lamina::profile::bench::place_scene;

@@ -4,7 +4,7 @@
 //! shader's own cost, free of the driver's per-draw work (see profiling/README.md for why the
 //! total is not gated).
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::sync::OnceLock;

@@ -1,6 +1,6 @@
 //! `lamina sweep` and `lamina report`: result files, charts and bad sweep files.
 
-mod common;
+use crate::common;
 
 use std::process::Command;
 

@@ -1,7 +1,7 @@
 //! The TIR table: GPU values against the f64 reference, the 16-bit copy, the disk cache, the
 //! fitted closed form against it; and every TIR mode and FGD table rendering every preset.
 
-mod common;
+use crate::common;
 
 use lamina::cache;
 use lamina::material::{presets, Stack};
@@ -141,7 +141,18 @@ fn the_cache_is_keyed_and_never_trusts_a_broken_file() {
 }
 
 #[test]
-fn every_tir_and_fgd_value_renders_every_preset_finite() {
+fn every_tir_and_fgd_value_renders_every_preset_finite_in_2_flux() {
+    every_tir_and_fgd_value_renders_every_preset_finite("tm2");
+}
+
+#[test]
+fn every_tir_and_fgd_value_renders_every_preset_finite_in_6_flux() {
+    every_tir_and_fgd_value_renders_every_preset_finite("tm6");
+}
+
+/// Each TIR mode and each FGD table renders every preset finite in `model` (two tests, so the
+/// models' shaders compile side by side).
+fn every_tir_and_fgd_value_renders_every_preset_finite(model: &str) {
     let gpu = common::gpu();
     let env = EnvDesc {
         face_size: 32,
@@ -155,30 +166,28 @@ fn every_tir_and_fgd_value_renders_every_preset_finite() {
         .map(|tir| format!("tir={tir},fgd=karis"))
         .into_iter()
         .chain(["belcour", "4d", "resampled4d"].map(|fgd| format!("tir=lut32,fgd={fgd}")));
-    for model in ["tm2", "tm6"] {
-        for axis in axes.clone() {
-            let variant: VariantKey = format!("model={model},{axis},max_layers=5")
-                .parse()
-                .unwrap();
-            // One pass for the stacks that end in a diffuse base, one for the others
-            // (`ShadeSpec::diffuse_base`).
-            let ceramic = Stack::resolve("glazed-ceramic").unwrap().params();
-            let plain = renderer.prepare_uniform(variant, &[]).unwrap();
-            let diffuse = renderer.prepare_uniform(variant, &ceramic).unwrap();
-            for stack in &stacks {
-                let layers = stack.params();
-                let pass = if diffuse.key.admits(&layers).is_ok() {
-                    &diffuse
-                } else {
-                    &plain
-                };
-                let frame = renderer.render(pass, &layers, 40, 40).unwrap();
-                assert!(
-                    frame.pixels.iter().all(|p| p.iter().all(|c| c.is_finite())),
-                    "{variant} on {}: a non-finite pixel",
-                    stack.name
-                );
-            }
+    for axis in axes {
+        let variant: VariantKey = format!("model={model},{axis},max_layers=5")
+            .parse()
+            .unwrap();
+        // One pass for the stacks that end in a diffuse base, one for the others
+        // (`ShadeSpec::diffuse_base`).
+        let ceramic = Stack::resolve("glazed-ceramic").unwrap().params();
+        let plain = renderer.prepare_uniform(variant, &[]).unwrap();
+        let diffuse = renderer.prepare_uniform(variant, &ceramic).unwrap();
+        for stack in &stacks {
+            let layers = stack.params();
+            let pass = if diffuse.key.admits(&layers).is_ok() {
+                &diffuse
+            } else {
+                &plain
+            };
+            let frame = renderer.render(pass, &layers, 40, 40).unwrap();
+            assert!(
+                frame.pixels.iter().all(|p| p.iter().all(|c| c.is_finite())),
+                "{variant} on {}: a non-finite pixel",
+                stack.name
+            );
         }
     }
     common::assert_validation_clean(&gpu);

@@ -2,7 +2,7 @@
 //! variant's own tables (GPU evaluator against `VariantOracle`), and the white furnace of a
 //! white base under lossless coats, which returns at most — and, lossless, all of — the light.
 
-mod common;
+use crate::common;
 
 use lamina::model::LayerParams;
 use lamina::render::eval::GpuEvaluator;

@@ -1,6 +1,6 @@
 //! The command line: the default render end to end, and bad input failing cleanly.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::Output;

@@ -1,7 +1,7 @@
 //! `lamina reference` from the command line: bad input refused by name, the JSON complete and
 //! identical on stdout and in `--out`, and Ctrl-C leaving no file behind.
 
-mod common;
+use crate::common;
 
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};

@@ -2,7 +2,7 @@
 //! under `src/` over 800 lines, no production function over 120 lines and at most 10 over 80,
 //! and floors — the top-level modules import each other without a loop (so each stands above
 //! all it imports; the binary's `cli` on top), the error enum aside, and `profile/`
-//! (measurements) imports nothing from `study/` (the documents above them). `cargo test --test structure -- --nocapture`
+//! (measurements) imports nothing from `study/` (the documents above them). `cargo test --test suite structure:: -- --nocapture`
 //! prints the figures.
 
 use std::collections::{BTreeMap, BTreeSet};

@@ -2,7 +2,7 @@
 //! the stack without the layer, a coverage of 1 exactly the stack, a screen-space mask picks
 //! one of the two per pixel, and a varying field matches the CPU twin's stack at the pixel.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

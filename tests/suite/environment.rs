@@ -1,6 +1,6 @@
 //! The prefiltered environment and the split-sum table against CPU references.
 
-mod common;
+use crate::common;
 
 use glam::DVec3;
 use lamina::tables::environment::{self, EnvDesc, Environment};

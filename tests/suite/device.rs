@@ -1,7 +1,7 @@
 //! Device creation, the feature report, shader compilation of every entry point, and that
 //! every GPU allocation is released when its owner goes.
 
-mod common;
+use crate::common;
 
 use lamina::render::eval::GpuEvaluator;
 use lamina::render::Renderer;

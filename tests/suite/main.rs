@@ -1,0 +1,27 @@
+//! lamina's integration tests, in one binary: on lavapipe (or whatever Vulkan device is
+//! present) with the Khronos validation layer on, every validation message a failure. One
+//! binary links once, and its tests share both cores while one of them compiles shaders
+//! on a single thread. `cargo test --test suite MODULE::` runs one file's tests.
+
+mod common;
+
+mod cli;
+mod device;
+mod diffuse;
+mod environment;
+mod fgd;
+mod gates;
+mod lights;
+mod model_gpu;
+mod model_vs_cpu;
+mod pipeline_cache;
+mod reference;
+mod reflection;
+mod render;
+mod spec_array;
+mod specialized;
+mod structure;
+mod surface;
+mod sweep;
+mod tables;
+mod viewer;
