@@ -8,7 +8,7 @@ use lamina::imageio::{self, HdrImage};
 use lamina::material::Stack;
 use lamina::profile::bench::{self, BenchConfig};
 use lamina::profile::counter::{self, CounterSetup, CounterSizes};
-use lamina::profile::image_error;
+use lamina::profile::image_error::{self, References};
 use lamina::profile::plan::{Case, Plan};
 use lamina::profile::results::Results;
 use lamina::render::reference;
@@ -145,12 +145,18 @@ fn image_errors(
     results: &mut Results,
 ) -> Result<()> {
     let bar = progress_bar("image error");
-    let (errors, maps) =
-        image_error::measure(gpu, equirect, config, spp, &mut |what, done, total| {
+    let (errors, maps) = image_error::measure(
+        gpu,
+        equirect,
+        config,
+        spp,
+        &mut References::default(),
+        &mut |what, done, total| {
             bar.set_message(what.to_owned());
             bar.set_length(total as u64);
             bar.set_position(done as u64);
-        })?;
+        },
+    )?;
     results.record_image_errors(&errors);
     bar.finish_and_clear();
     check_validation(gpu)?;

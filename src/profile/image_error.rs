@@ -9,10 +9,13 @@ use std::sync::atomic::AtomicBool;
 use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::imageio::{tonemap, HdrImage};
+use crate::model::LayerParams;
+use crate::render::lights::Lighting;
 use crate::render::reference::{self, Convergence, ReferenceImage};
+use crate::render::scene::Scene;
 use crate::render::{PassCache, Renderer, TargetFormat};
 use crate::tables::environment::EnvDesc;
-use crate::variant::VariantKey;
+use crate::variant::{Model, VariantKey};
 
 use super::bench::{place_scene, BenchConfig};
 use super::results::{CaseImageError, ImageError};
@@ -94,6 +97,7 @@ pub fn measure(
     equirect: &HdrImage,
     config: &BenchConfig,
     spp: u32,
+    references: &mut References,
     progress: &mut impl FnMut(&str, usize, usize),
 ) -> Result<(Vec<CaseImageError>, ErrorMaps)> {
     let cases = config.plan.cases();
@@ -103,7 +107,6 @@ pub fn measure(
     renderer.lighting = config.lighting.clone();
     place_scene(&mut renderer, config.scene, width, height)?;
     let never = AtomicBool::new(false);
-    let mut references: Vec<(String, ReferenceImage)> = Vec::new();
     let mut passes = PassCache::new();
     let mut errors = vec![CaseImageError::default(); cases.len()];
     let mut maps = Vec::new();
@@ -115,7 +118,15 @@ pub fn measure(
         }
         let layers = case.stack.params();
         renderer.set_surface(None)?;
-        if !references.iter().any(|(name, _)| *name == case.stack.name) {
+        let key = ReferenceKey {
+            model: case.stack.model,
+            layers: layers.clone(),
+            scene: config.scene,
+            size: (width, height),
+            lighting: config.lighting.clone(),
+            spp,
+        };
+        if references.find(&key).is_none() {
             let image = reference::render(
                 &mut renderer,
                 case.stack.model,
@@ -126,12 +137,9 @@ pub fn measure(
                 &never,
             )?
             .expect("an image-error reference is never stopped");
-            references.push((case.stack.name.clone(), image));
+            references.images.push((key.clone(), image));
         }
-        let (_, image) = references
-            .iter()
-            .find(|(name, _)| *name == case.stack.name)
-            .expect("rendered above");
+        let image = references.find(&key).expect("rendered above");
         let pass = passes.get(&mut renderer, &case.pass_key(&config.lighting)?)?;
         let frame = renderer.render(pass, &layers, width, height)?;
         let (error, map) = compare(&frame.pixels, &image.pixels, width, height);
@@ -161,6 +169,32 @@ pub fn measure(
     }
     progress("image error", cases.len(), cases.len());
     Ok((errors, maps))
+}
+
+/// What a reference image depends on, under one environment: the stack in its model, the
+/// scene and size, the lighting and the samples.
+#[derive(Clone, PartialEq)]
+struct ReferenceKey {
+    model: Model,
+    layers: Vec<LayerParams>,
+    scene: Scene,
+    size: (u32, u32),
+    lighting: Lighting,
+    spp: u32,
+}
+
+/// The reference images rendered so far under one environment, kept across the measurements
+/// of a run: a suite's studies of one material at one size share its reference, rendered once
+/// (it is seeded by its frames, so a second render would be the same image).
+#[derive(Default)]
+pub struct References {
+    images: Vec<(ReferenceKey, ReferenceImage)>,
+}
+
+impl References {
+    fn find(&self, key: &ReferenceKey) -> Option<&ReferenceImage> {
+        self.images.iter().find(|(k, _)| k == key).map(|(_, i)| i)
+    }
 }
 
 /// Offset of the run index under which a half-precision run's error map against its fp32

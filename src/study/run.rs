@@ -13,7 +13,7 @@ use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
 use crate::profile::bench::{self, BenchConfig};
 use crate::profile::counter::{self, CounterSetup, CounterSizes};
-use crate::profile::image_error::{self, ErrorMaps};
+use crate::profile::image_error::{self, ErrorMaps, References};
 use crate::profile::plan::Plan;
 use crate::profile::prebuild;
 use crate::profile::results::Results;
@@ -37,12 +37,14 @@ pub struct Timed {
 }
 
 /// The first phase of a study: its plan timed interleaved on `gpu`, then the baked-table
-/// error study, the reference comparisons and the image errors it asks for;
-/// `progress(what, done, total)` follows each.
+/// error study, the reference comparisons and the image errors it asks for (against the
+/// reference images in `references`, rendered there when missing); `progress(what, done,
+/// total)` follows each.
 pub fn time(
     gpu: &Gpu,
     equirect: &HdrImage,
     study: &Study,
+    references: &mut References,
     progress: &mut impl FnMut(&str, usize, usize),
 ) -> Result<Timed> {
     let config = BenchConfig {
@@ -69,7 +71,8 @@ pub fn time(
     };
     let error_maps = match study.image_error_spp {
         Some(spp) => {
-            let (errors, maps) = image_error::measure(gpu, equirect, &config, spp, progress)?;
+            let (errors, maps) =
+                image_error::measure(gpu, equirect, &config, spp, references, progress)?;
             results.record_image_errors(&errors);
             maps
         }
@@ -275,6 +278,7 @@ pub fn run_suite(
         on(Event::Prebuilt(prebuild_tables(run, studies)));
     }
     let mut timed = Vec::with_capacity(studies.len());
+    let mut references = References::default();
     for (index, study) in studies.iter().enumerate() {
         on(Event::Timing {
             index,
@@ -282,9 +286,13 @@ pub fn run_suite(
             study,
         });
         let started = Instant::now();
-        timed.push(time(gpu, run.equirect, study, &mut |what, done, total| {
-            on(Event::Progress { what, done, total })
-        })?);
+        timed.push(time(
+            gpu,
+            run.equirect,
+            study,
+            &mut references,
+            &mut |what, done, total| on(Event::Progress { what, done, total }),
+        )?);
         check_validation(gpu)?;
         on(Event::Timed {
             study,
