@@ -83,7 +83,7 @@ fn instruction_counts_order_the_variants() {
     let repeat = (tm2 as f64 - tm2_again as f64).abs() / tm2 as f64;
     println!("repeatability: {repeat:.2e}");
     assert!(
-        repeat < 1e-4,
+        common::same_count(tm2, tm2_again),
         "the same draw counted {tm2} then {tm2_again}"
     );
     assert!(tm2 > ggx, "tm2 {tm2} <= ggx {ggx}");
@@ -114,9 +114,10 @@ fn specialization_orders_the_counts() {
     else {
         panic!("one count per case");
     };
-    assert_eq!(
-        specialized_4, specialized_16,
-        "a specialized pipeline's count depends on max_layers"
+    assert!(
+        common::same_count(specialized_4, specialized_16),
+        "a specialized pipeline's count depends on max_layers: {specialized_4} against \
+         {specialized_16}"
     );
     assert!(
         specialized_4 < generic_16,
