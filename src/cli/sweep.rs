@@ -140,7 +140,10 @@ fn show(event: Event<'_>, bar: &mut Option<ProgressBar>) {
             if let Some(bar) = bar.take() {
                 bar.finish_and_clear();
             }
-            println!("  counted instructions in {:.1} s", took.as_secs_f64());
+            println!(
+                "  counted instructions in {:.1} s (begun beside the timing)",
+                took.as_secs_f64()
+            );
         }
         Event::Written {
             study,

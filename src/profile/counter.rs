@@ -21,6 +21,8 @@ use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::str::FromStr;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::mpsc::Sender;
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
@@ -212,9 +214,7 @@ impl CounterSetup {
 /// Counts the instructions of every case of `plans` at both `sizes`, in one pool of workers
 /// (a suite's studies: each worker starts once and compiles each shader once), with `scene`'s
 /// mesh under `lighting`: where the counts were taken, and per plan one [`CaseCounts`] per
-/// case, in plan order — the whole-draw counts at each size and the JIT instructions per
-/// shaded pixel (the difference of the two counts over the difference of the pixels the scene
-/// shades, [`Scene::shaded_pixels`]).
+/// case, in plan order ([`count_pools`] with one pool).
 pub fn count_plans(
     plans: &[&Plan],
     setup: &CounterSetup,
@@ -222,41 +222,96 @@ pub fn count_plans(
     lighting: &Lighting,
     sizes: CounterSizes,
     progress: impl FnMut(usize, usize),
-) -> Result<(CounterInfo, Vec<Vec<CaseCounts>>)> {
+) -> Result<PoolCounts> {
+    let pool = Pool {
+        plans: plans.to_vec(),
+        scene,
+        lighting,
+        sizes,
+    };
+    let mut counts = count_pools(std::slice::from_ref(&pool), setup, progress)?;
+    Ok(counts.remove(0))
+}
+
+/// Plans counted with one scene, lighting and pair of sizes: a worker draws one of each.
+pub struct Pool<'a> {
+    pub plans: Vec<&'a Plan>,
+    pub scene: Scene,
+    pub lighting: &'a Lighting,
+    pub sizes: CounterSizes,
+}
+
+/// What a pool's counts are: where they were taken, and per plan one [`CaseCounts`] per case,
+/// in plan order.
+pub type PoolCounts = (CounterInfo, Vec<Vec<CaseCounts>>);
+
+/// Counts every case of every pool at the pool's two sizes, the workers of all pools in one
+/// queue ([`count_requests`]): per pool, the whole-draw counts at each size and the JIT
+/// instructions per shaded pixel (the difference of the two counts over the difference of the
+/// pixels the scene shades, [`Scene::shaded_pixels`]).
+pub fn count_pools(
+    pools: &[Pool<'_>],
+    setup: &CounterSetup,
+    progress: impl FnMut(usize, usize),
+) -> Result<Vec<PoolCounts>> {
     // The renderers of the bench and of the worker look through the default camera.
     let camera = Camera::default();
-    let shaded_pixels = sizes
-        .both()
-        .map(|s| scene.shaded_pixels(&camera, s.width, s.height));
-    let [small_pixels, large_pixels] = shaded_pixels;
-    if large_pixels <= small_pixels {
-        return Err(Error::Unsupported(format!(
-            "the {scene} scene shades {small_pixels} pixels at {} and {large_pixels} at {}: no \
-             per-pixel difference to count; give a larger second counter size",
-            sizes.small, sizes.large
-        )));
+    let mut shaded = Vec::with_capacity(pools.len());
+    for pool in pools {
+        let [small, large] = pool
+            .sizes
+            .both()
+            .map(|s| pool.scene.shaded_pixels(&camera, s.width, s.height));
+        if large <= small {
+            return Err(Error::Unsupported(format!(
+                "the {} scene shades {small} pixels at {} and {large} at {}: no per-pixel \
+                 difference to count; give a larger second counter size",
+                pool.scene, pool.sizes.small, pool.sizes.large
+            )));
+        }
+        shaded.push([small, large]);
     }
-    let cases: Vec<Case> = plans
+    let cases: Vec<Vec<Case>> = pools
         .iter()
-        .flat_map(|plan| plan.cases().iter().cloned())
+        .map(|p| {
+            p.plans
+                .iter()
+                .flat_map(|plan| plan.cases().iter().cloned())
+                .collect()
+        })
         .collect();
-    let lighting_text = (*lighting != Lighting::default()).then(|| lighting.to_toml());
-    let counts = count_instructions(
-        &CountRequest {
+    let lighting: Vec<Option<String>> = pools
+        .iter()
+        .map(|p| (*p.lighting != Lighting::default()).then(|| p.lighting.to_toml()))
+        .collect();
+    let sizes: Vec<[Size; 2]> = pools.iter().map(|p| p.sizes.both()).collect();
+    let requests: Vec<CountRequest<'_>> = (0..pools.len())
+        .map(|i| CountRequest {
             exe: &setup.exe,
             global_args: setup.global_args.clone(),
             env_map: &setup.env_map,
-            cases: &cases,
-            scene,
-            lighting: lighting_text.as_deref(),
-            sizes: &sizes.both(),
-        },
-        progress,
-    )?;
-    let added_pixels = (large_pixels - small_pixels) as f64;
+            cases: &cases[i],
+            scene: pools[i].scene,
+            lighting: lighting[i].as_deref(),
+            sizes: &sizes[i],
+        })
+        .collect();
+    let counts = count_requests(&requests, progress)?;
+    Ok(pools
+        .iter()
+        .zip(shaded)
+        .zip(counts)
+        .map(|((pool, shaded), counts)| per_plan(pool, shaded, counts))
+        .collect())
+}
+
+/// A pool's counts (`counts[case][size]`, its plans' cases in order) split per plan, with the
+/// instructions per added shaded pixel.
+fn per_plan(pool: &Pool<'_>, shaded_pixels: [u64; 2], counts: Vec<Vec<Counts>>) -> PoolCounts {
+    let added_pixels = (shaded_pixels[1] - shaded_pixels[0]) as f64;
     let mut counts = counts.into_iter().map(|count| {
         let [small, large] = count[..] else {
-            unreachable!("count_instructions answers one count per size");
+            unreachable!("count_requests answers one count per size");
         };
         CaseCounts {
             small,
@@ -264,15 +319,16 @@ pub fn count_plans(
             per_pixel: (large.jit as f64 - small.jit as f64) / added_pixels,
         }
     });
-    let per_plan = plans
+    let per_plan = pool
+        .plans
         .iter()
         .map(|plan| counts.by_ref().take(plan.cases().len()).collect())
         .collect();
     let info = CounterInfo {
-        sizes: sizes.both().map(|s| [s.width, s.height]),
+        sizes: pool.sizes.both().map(|s| [s.width, s.height]),
         shaded_pixels,
     };
-    Ok((info, per_plan))
+    (info, per_plan)
 }
 
 /// What the parent needs to start the worker.
@@ -292,80 +348,158 @@ pub struct CountRequest<'a> {
 
 /// Counts the instructions of each case's shaded draw at each size: `counts[case][size]`;
 /// `progress(done, total)` follows the workers. Every case gets a count at every size or the
-/// whole call fails.
-///
-/// The cases' tables and SPIR-V are built first natively (`prebuild`): under valgrind each
-/// worker would build them some fifty times slower. The cases are then shared out over one
-/// worker per core (each worker runs llvmpipe on one thread, `LP_NUM_THREADS=0`), side by
-/// side: most of a worker's time is llvmpipe compiling shaders under valgrind, which the
-/// count leaves out, so the cases of one shader go to one worker ([`shader_groups`]). A count
-/// does not depend on the worker that takes it (the gate test counts one case twice).
+/// whole call fails ([`count_requests`] with one request).
 pub fn count_instructions(
     request: &CountRequest<'_>,
-    mut progress: impl FnMut(usize, usize),
+    progress: impl FnMut(usize, usize),
 ) -> Result<Vec<Vec<Counts>>> {
+    let mut counts = count_requests(std::slice::from_ref(request), progress)?;
+    Ok(counts.remove(0))
+}
+
+/// Counts every request's cases: per request, `counts[case][size]`; `progress(done, total)`
+/// follows the workers over all requests.
+///
+/// The cases' tables and SPIR-V are built first natively (`prebuild`): under valgrind each
+/// worker would build them some fifty times slower. Each request's cases are then shared out
+/// over one worker per core (each worker runs llvmpipe on one thread, `LP_NUM_THREADS=0`):
+/// most of a worker's time is llvmpipe compiling shaders under valgrind, which the count
+/// leaves out, so the cases of one shader go to one worker ([`shader_groups`]). The workers of
+/// all requests wait in one queue, the largest first, and one runs per core: a core a request's
+/// first worker leaves goes to the next worker in the queue, not idle until its other workers
+/// end. A count does not depend on the worker that takes it (the gate test counts one case
+/// twice).
+pub fn count_requests(
+    requests: &[CountRequest<'_>],
+    progress: impl FnMut(usize, usize),
+) -> Result<Vec<Vec<Vec<Counts>>>> {
+    let Some(first) = requests.first() else {
+        return Ok(Vec::new());
+    };
     let mut variants: Vec<VariantKey> = Vec::new();
-    for case in request.cases {
+    for case in requests.iter().flat_map(|r| r.cases) {
         if !variants.contains(&case.variant) {
             variants.push(case.variant);
         }
     }
-    prebuild::run(request.exe, &request.global_args, &variants)?;
+    prebuild::run(first.exe, &first.global_args, &variants)?;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let workers = cores.min(request.cases.len()).max(1);
-    let shares = shader_groups(request.cases, workers);
-    let owned: Vec<Vec<Case>> = shares
+    let mut jobs: Vec<Job> = Vec::new();
+    for (r, request) in requests.iter().enumerate() {
+        let workers = cores.min(request.cases.len()).max(1);
+        for share in shader_groups(request.cases, workers) {
+            jobs.push(Job {
+                request: r,
+                cases: share.iter().map(|&i| request.cases[i].clone()).collect(),
+                indices: share,
+            });
+        }
+    }
+    jobs.sort_by_key(|job| std::cmp::Reverse(job.indices.len()));
+    let outcomes = run_jobs(requests, &jobs, cores, progress);
+    let mut counts: Vec<Vec<Vec<Counts>>> = requests
         .iter()
-        .map(|share| share.iter().map(|&i| request.cases[i].clone()).collect())
+        .map(|r| vec![Vec::new(); r.cases.len()])
         .collect();
-    let chunks: Vec<&[Case]> = owned.iter().map(Vec::as_slice).collect();
-    let total = request.cases.len() * request.sizes.len();
+    for (job, outcome) in jobs.iter().zip(outcomes) {
+        for (&i, count) in job.indices.iter().zip(outcome?) {
+            counts[job.request][i] = count;
+        }
+    }
+    Ok(counts)
+}
+
+/// One worker's share of a request: the cases (of whole shaders) and their indices in it.
+struct Job {
+    request: usize,
+    indices: Vec<usize>,
+    cases: Vec<Case>,
+}
+
+/// Runs `jobs` in order, at most `runners` workers at a time; per job its counts, or the error
+/// that stopped it (after a failure no new worker starts: the jobs not begun answer that a
+/// worker before them failed).
+fn run_jobs(
+    requests: &[CountRequest<'_>],
+    jobs: &[Job],
+    runners: usize,
+    mut progress: impl FnMut(usize, usize),
+) -> Vec<Result<Vec<Vec<Counts>>>> {
+    let total: usize = jobs
+        .iter()
+        .map(|job| job.indices.len() * requests[job.request].sizes.len())
+        .sum();
+    let next = AtomicUsize::new(0);
     let (tx, rx) = std::sync::mpsc::channel::<(usize, usize)>();
-    let outcomes: Vec<Result<Vec<Vec<Counts>>>> = std::thread::scope(|scope| {
-        let handles: Vec<_> = chunks
-            .iter()
-            .enumerate()
-            .map(|(i, cases)| {
-                let tx = tx.clone();
-                let part = CountRequest {
-                    exe: request.exe,
-                    global_args: request.global_args.clone(),
-                    env_map: request.env_map,
-                    cases,
-                    scene: request.scene,
-                    lighting: request.lighting,
-                    sizes: request.sizes,
-                };
+    let mut outcomes: Vec<Option<Result<Vec<Vec<Counts>>>>> = Vec::new();
+    outcomes.resize_with(jobs.len(), || None);
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..runners.clamp(1, jobs.len().max(1)))
+            .map(|_| {
+                let (tx, next) = (tx.clone(), &next);
                 scope.spawn(move || {
-                    let dir = scratch_dir(i)?;
-                    let result = run_worker(&part, &dir, &mut |done, _| {
-                        let _ = tx.send((i, done));
-                    });
-                    // The dumps are read (or the run failed); nothing in the directory is kept.
-                    let _ = std::fs::remove_dir_all(&dir);
-                    result
+                    let mut mine = Vec::new();
+                    loop {
+                        let j = next.fetch_add(1, Ordering::SeqCst);
+                        let Some(job) = jobs.get(j) else { break };
+                        let outcome = run_job(&requests[job.request], job, j, &tx);
+                        if outcome.is_err() {
+                            next.store(jobs.len(), Ordering::SeqCst);
+                        }
+                        mine.push((j, outcome));
+                    }
+                    mine
                 })
             })
             .collect();
         drop(tx);
-        let mut done = vec![0; chunks.len()];
+        let mut done = vec![0; jobs.len()];
         progress(0, total);
-        for (i, n) in rx {
-            done[i] = n;
+        for (j, n) in rx {
+            done[j] = n;
             progress(done.iter().sum(), total);
         }
-        handles
-            .into_iter()
-            .map(|h| h.join().expect("a counter thread only returns"))
-            .collect()
-    });
-    let mut counts = vec![Vec::new(); request.cases.len()];
-    for (share, outcome) in shares.iter().zip(outcomes) {
-        for (&i, count) in share.iter().zip(outcome?) {
-            counts[i] = count;
+        for h in handles {
+            for (j, outcome) in h.join().expect("a counter thread only returns") {
+                outcomes[j] = Some(outcome);
+            }
         }
-    }
-    Ok(counts)
+    });
+    outcomes
+        .into_iter()
+        .map(|o| {
+            o.unwrap_or_else(|| {
+                Err(Error::Unsupported(
+                    "not counted: a counting worker before it failed".into(),
+                ))
+            })
+        })
+        .collect()
+}
+
+/// Runs one job's worker (`index` names its scratch directory and its progress messages).
+fn run_job(
+    request: &CountRequest<'_>,
+    job: &Job,
+    index: usize,
+    tx: &Sender<(usize, usize)>,
+) -> Result<Vec<Vec<Counts>>> {
+    let part = CountRequest {
+        exe: request.exe,
+        global_args: request.global_args.clone(),
+        env_map: request.env_map,
+        cases: &job.cases,
+        scene: request.scene,
+        lighting: request.lighting,
+        sizes: request.sizes,
+    };
+    let dir = scratch_dir(index)?;
+    let result = run_worker(&part, &dir, &mut |done, _| {
+        let _ = tx.send((index, done));
+    });
+    // The dumps are read (or the run failed); nothing in the directory is kept.
+    let _ = std::fs::remove_dir_all(&dir);
+    result
 }
 
 /// The indices of `cases` shared out over `workers`: the cases of one shader together — one
@@ -460,6 +594,7 @@ fn run_worker(
         .env("LP_NUM_THREADS", "0")
         .stdout(Stdio::null())
         .stderr(Stdio::piped());
+    lowest_priority(&mut command);
     let mut child = command.spawn().map_err(|e| {
         if e.kind() == std::io::ErrorKind::NotFound {
             Error::Unsupported(
@@ -544,6 +679,25 @@ fn read_dumps(dir: &Path, request: &CountRequest<'_>, tail: &[String]) -> Result
         })
         .collect()
 }
+
+/// Starts `command` at the lowest scheduling priority (nice 19): a count does not depend on
+/// when its instructions run, and a study timed beside it (`study::run`) keeps its core.
+#[cfg(unix)]
+fn lowest_priority(command: &mut Command) {
+    use std::os::unix::process::CommandExt;
+    // SAFETY: the closure runs in the child between fork and exec, where only
+    // async-signal-safe calls are allowed: setpriority is one (a plain system call), and the
+    // closure touches no memory of the parent. A failure leaves the child at its priority.
+    unsafe {
+        command.pre_exec(|| {
+            libc::setpriority(libc::PRIO_PROCESS, 0, 19);
+            Ok(())
+        });
+    }
+}
+
+#[cfg(not(unix))]
+fn lowest_priority(_command: &mut Command) {}
 
 fn io_error(path: &Path, e: std::io::Error) -> Error {
     Error::Output {

@@ -12,14 +12,11 @@ use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
 use crate::profile::bench::{self, BenchConfig};
-use crate::profile::counter::{self, CounterSetup, CounterSizes};
+use crate::profile::counter::{self, CounterSetup, Pool};
 use crate::profile::image_error::{self, ErrorMaps, References};
-use crate::profile::plan::Plan;
 use crate::profile::prebuild;
-use crate::profile::results::Results;
+use crate::profile::results::{CaseCounts, CounterInfo, Results};
 use crate::reference::compare::MaterialReference;
-use crate::render::lights::Lighting;
-use crate::render::scene::Scene;
 use crate::tables::environment::EnvDesc;
 use crate::variant::Mode;
 
@@ -86,50 +83,51 @@ pub fn time(
     })
 }
 
-/// Counts the instructions of every timed study that asks for them, in one pool of workers
-/// per scene, counter sizes and lighting (so a suite starts its workers and compiles each
-/// shader under valgrind once, not once per study). `studies[i]` was timed into `timed[i]`.
+/// What the counter measured of one study: where it counted, and one count per case of its
+/// plan.
+pub type StudyCounts = (CounterInfo, Vec<CaseCounts>);
+
+/// Counts the instructions of every study that asks for them, in one pool of workers per
+/// scene, counter sizes and lighting (so a suite starts its workers and compiles each shader
+/// under valgrind once, not once per study), the pools' workers in one queue: per study, its
+/// counts, or `None` when it does not count. Needs only the studies' plans, so it may run
+/// beside their timing.
 pub fn count(
     studies: &[Study],
-    timed: &mut [Timed],
     setup: &CounterSetup,
-    mut progress: impl FnMut(usize, usize),
-) -> Result<()> {
+    progress: impl FnMut(usize, usize),
+) -> Result<Vec<Option<StudyCounts>>> {
     // One pool of workers per scene, counted sizes and lighting: a worker draws one of each.
-    let mut groups: Vec<(Scene, CounterSizes, &Lighting)> = Vec::new();
-    for s in studies {
-        if let Some(sizes) = s.counter {
-            let group = (s.scene, sizes, &s.lighting);
-            if !groups.contains(&group) {
-                groups.push(group);
+    let mut pools: Vec<(Pool<'_>, Vec<usize>)> = Vec::new();
+    for (i, s) in studies.iter().enumerate() {
+        let Some(sizes) = s.counter else { continue };
+        let same =
+            |p: &Pool<'_>| p.scene == s.scene && p.sizes == sizes && *p.lighting == s.lighting;
+        match pools.iter_mut().find(|(p, _)| same(p)) {
+            Some((pool, members)) => {
+                pool.plans.push(&s.plan);
+                members.push(i);
             }
+            None => pools.push((
+                Pool {
+                    plans: vec![&s.plan],
+                    scene: s.scene,
+                    lighting: &s.lighting,
+                    sizes,
+                },
+                vec![i],
+            )),
         }
     }
-    let total: usize = studies
-        .iter()
-        .filter(|s| s.counter.is_some())
-        .map(|s| s.plan.cases().len() * 2)
-        .sum();
-    let mut before = 0;
-    for (scene, sizes, lighting) in groups {
-        let members: Vec<usize> = (0..studies.len())
-            .filter(|&i| {
-                let s = &studies[i];
-                s.scene == scene && s.counter == Some(sizes) && s.lighting == *lighting
-            })
-            .collect();
-        let plans: Vec<&Plan> = members.iter().map(|&i| &studies[i].plan).collect();
-        let here: usize = plans.iter().map(|p| p.cases().len() * 2).sum();
-        let (info, counts) =
-            counter::count_plans(&plans, setup, scene, lighting, sizes, |done, _| {
-                progress(before + done, total)
-            })?;
-        for (&i, counts) in members.iter().zip(&counts) {
-            timed[i].results.record_counts(info.clone(), counts);
+    let (pools, members): (Vec<Pool<'_>>, Vec<Vec<usize>>) = pools.into_iter().unzip();
+    let counts = counter::count_pools(&pools, setup, progress)?;
+    let mut out = vec![None; studies.len()];
+    for ((info, per_plan), members) in counts.into_iter().zip(members) {
+        for (i, plan_counts) in members.into_iter().zip(per_plan) {
+            out[i] = Some((info.clone(), plan_counts));
         }
-        before += here;
     }
-    Ok(())
+    Ok(out)
 }
 
 /// The last phase: the study's results and its metadata (counted when `counted` and the
@@ -246,15 +244,11 @@ pub enum Event<'a> {
         total: usize,
     },
     /// The study was timed (its image errors and comparisons measured too).
-    Timed {
-        study: &'a Study,
-        took: Duration,
-    },
-    /// The instruction counts of every study that counts begin.
+    Timed { study: &'a Study, took: Duration },
+    /// Every study is timed; the instruction counts, begun beside the timing, go on.
     Counting,
-    Counted {
-        took: Duration,
-    },
+    /// The counts are done, `took` after they began.
+    Counted { took: Duration },
     /// The study's directory was written, with this many charts.
     Written {
         study: &'a Study,
@@ -265,9 +259,10 @@ pub enum Event<'a> {
 }
 
 /// Runs `studies`: the tables prebuilt where that helps (`profile::prebuild`), every study
-/// timed, then all the counts in one pool of workers (each worker starts once and compiles
-/// each shader under valgrind once for the whole suite), then each study's directory written;
-/// returns the directories. Fails at the first validation message.
+/// timed and, beside the timing, all the counts in one pool of workers (each worker starts
+/// once and compiles each shader under valgrind once for the whole suite; niced, so the timed
+/// thread keeps its core), then each study's directory written; returns the directories.
+/// Fails at the first validation message.
 pub fn run_suite(
     run: &SuiteRun<'_>,
     studies: &[Study],
@@ -277,45 +272,42 @@ pub fn run_suite(
     if prebuild::worthwhile(gpu) {
         on(Event::Prebuilt(prebuild_tables(run, studies)));
     }
-    let mut timed = Vec::with_capacity(studies.len());
-    let mut references = References::default();
-    for (index, study) in studies.iter().enumerate() {
-        on(Event::Timing {
-            index,
-            count: studies.len(),
-            study,
-        });
+    // The counts need only the plans: they run beside the timing, their workers niced so that
+    // the timed thread keeps its core (`profile::counter`), and both cores after it.
+    let (timed, counts) = std::thread::scope(|scope| -> Result<_> {
+        let (progress_tx, progress_rx) = std::sync::mpsc::channel();
         let started = Instant::now();
-        timed.push(time(
-            gpu,
-            run.equirect,
-            study,
-            &mut references,
-            &mut |what, done, total| on(Event::Progress { what, done, total }),
-        )?);
-        check_validation(gpu)?;
-        on(Event::Timed {
-            study,
-            took: started.elapsed(),
+        let counting = run.counter.map(|setup| {
+            scope.spawn(move || {
+                count(studies, setup, |done, total| {
+                    let _ = progress_tx.send((done, total));
+                })
+            })
         });
-    }
-    if let Some(setup) = run.counter {
+        let timed = time_all(run, studies, on)?;
+        let Some(counting) = counting else {
+            return Ok((timed, Vec::new()));
+        };
         on(Event::Counting);
-        let started = Instant::now();
-        count(studies, &mut timed, setup, |done, total| {
+        for (done, total) in progress_rx {
             on(Event::Progress {
                 what: "counted",
                 done,
                 total,
-            })
-        })?;
+            });
+        }
+        let counts = counting.join().expect("the counting thread only returns")?;
         on(Event::Counted {
             took: started.elapsed(),
         });
-    }
+        Ok((timed, counts))
+    })?;
     let mut written = Vec::with_capacity(studies.len());
-    for (study, timed) in studies.iter().zip(timed) {
+    for (i, (study, timed)) in studies.iter().zip(timed).enumerate() {
         let mut timed = timed;
+        if let Some(Some((info, counts))) = counts.get(i) {
+            timed.results.record_counts(info.clone(), counts);
+        }
         let error_maps = std::mem::take(&mut timed.error_maps);
         let (results, meta) = finish(study, timed, run.counter.is_some());
         let dir = output_dir(run.out, study, run.suite);
@@ -329,6 +321,38 @@ pub fn run_suite(
         written.push(dir);
     }
     Ok(written)
+}
+
+/// Every study's timing phase ([`time`]), in order, the reference images shared; fails at
+/// the first validation message.
+fn time_all(
+    run: &SuiteRun<'_>,
+    studies: &[Study],
+    on: &mut dyn FnMut(Event<'_>),
+) -> Result<Vec<Timed>> {
+    let mut timed = Vec::with_capacity(studies.len());
+    let mut references = References::default();
+    for (index, study) in studies.iter().enumerate() {
+        on(Event::Timing {
+            index,
+            count: studies.len(),
+            study,
+        });
+        let started = Instant::now();
+        timed.push(time(
+            run.gpu,
+            run.equirect,
+            study,
+            &mut references,
+            &mut |what, done, total| on(Event::Progress { what, done, total }),
+        )?);
+        check_validation(run.gpu)?;
+        on(Event::Timed {
+            study,
+            took: started.elapsed(),
+        });
+    }
+    Ok(timed)
 }
 
 /// The tables of every study's variants, built by the table worker on every core.
