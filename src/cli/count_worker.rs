@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use lamina::imageio;
-use lamina::profile::counter::{self, WorkerJob};
+use lamina::profile::count_worker::{self, WorkerJob};
 use lamina::render::scene::Scene;
 use lamina::Size;
 
@@ -28,6 +28,6 @@ pub fn run(global: &GlobalArgs, args: &CountWorkerArgs) -> Result<()> {
     let (cases, lighting) = WorkerJob::read(&args.job)?;
     let equirect = imageio::read_exr(&args.env).context("reading the environment map")?;
     let gpu = global.open_gpu()?;
-    counter::worker(&gpu, &equirect, &cases, args.scene, &lighting, &args.sizes)?;
+    count_worker::worker(&gpu, &equirect, &cases, args.scene, &lighting, &args.sizes)?;
     check_validation(&gpu)
 }

@@ -5,6 +5,7 @@
 
 pub mod bench;
 pub mod callgrind;
+pub mod count_worker;
 pub mod counter;
 pub mod image_error;
 pub mod plan;
