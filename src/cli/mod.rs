@@ -13,6 +13,7 @@ mod count_worker;
 mod devices;
 mod diff;
 mod eval;
+mod export;
 mod furnace;
 mod reference;
 mod render;
@@ -76,6 +77,10 @@ enum Command {
     /// What static simplification removes from a material (index-matched layers, empty media,
     /// layers no light reaches), and why; optionally the simplified material file.
     Simplify(simplify::SimplifyArgs),
+    /// The forward pass of one variant and material as SPIR-V with its specialization
+    /// constants frozen (spirv-opt, validated by spirv-val), and spec.json with their values:
+    /// for offline compilers and shader analysers.
+    Export(export::ExportArgs),
     /// Render every preset material in each variant into one tiled PNG.
     Sheet(sheet::SheetArgs),
     /// Interactive viewer: edit the layer stack, switch variants, watch the GPU time.
@@ -115,6 +120,7 @@ pub fn run(cli: &Cli) -> Result<()> {
         Command::Furnace(args) => furnace::run(global, args),
         Command::BakeError(args) => bake_error::run(global, args),
         Command::Simplify(args) => simplify::run(args),
+        Command::Export(args) => export::run(args),
         Command::Sheet(args) => sheet::run(global, args),
         Command::View(args) => view::run(global, args),
         Command::Bench(args) => bench::run(global, args),

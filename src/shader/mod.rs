@@ -2,6 +2,7 @@
 //! The variant key the shaders are specialized with is [`crate::variant`].
 
 mod compiler;
+pub mod freeze;
 pub mod interface;
 pub mod kernel;
 pub mod specialize;

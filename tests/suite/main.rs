@@ -9,6 +9,7 @@ mod cli;
 mod device;
 mod diffuse;
 mod environment;
+mod export;
 mod fgd;
 mod gates;
 mod lights;

@@ -1,0 +1,97 @@
+//! `lamina export`: frozen SPIR-V that validates and holds no specialization constant, its
+//! values beside it, and the stacks it refuses named.
+
+use std::process::Command;
+
+use crate::common::{self, lamina, text};
+use lamina::shader::freeze::spec_constant_count;
+
+fn spirv_val(path: &std::path::Path) {
+    let out = Command::new("spirv-val")
+        .args(["--target-env", "vulkan1.3"])
+        .arg(path)
+        .output()
+        .expect("spirv-val runs (Debian: spirv-tools)");
+    assert!(
+        out.status.success(),
+        "{}: {}",
+        path.display(),
+        text(&out.stderr)
+    );
+}
+
+#[test]
+fn exported_modules_validate_and_hold_no_specialization_constant() {
+    // (variant, material, SpecId, the value the pass gives it): `max_layers` (1) under the
+    // generic pass, the stack's layer count (8) under the per-material ones.
+    for (variant, material, id, value) in [
+        ("model=tm2,mode=specialized", "varnished-gold", 8, 2),
+        ("model=tm6,mode=specialized-values", "dusty-varnish", 8, 2),
+        ("model=tm2,max_layers=8", "five-layers", 1, 8),
+    ] {
+        let dir = common::scratch_dir(&format!("export-{material}"));
+        let out = lamina(
+            &[
+                "export",
+                "--variant",
+                variant,
+                "--material",
+                material,
+                "--out",
+                "x",
+            ],
+            &dir,
+        );
+        assert!(out.status.success(), "{variant}: {}", text(&out.stderr));
+        for module in ["forward.vert.spv", "forward.frag.spv"] {
+            let path = dir.join("x").join(module);
+            spirv_val(&path);
+            let bytes = std::fs::read(&path).unwrap();
+            let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+            assert_eq!(
+                spec_constant_count(&words).unwrap(),
+                0,
+                "{variant}: {module}"
+            );
+        }
+        let spec: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("x/spec.json")).unwrap()).unwrap();
+        assert!(spec["variant"]
+            .as_str()
+            .unwrap()
+            .contains(variant.split(',').next().unwrap()));
+        let constants = spec["constants"].as_array().unwrap();
+        let constant = constants.iter().find(|c| c["id"] == id).unwrap();
+        assert_eq!(constant["bits"], value, "{variant}: SpecId {id}");
+    }
+}
+
+#[test]
+fn export_refuses_baked_passes_and_unknown_materials_by_name() {
+    let dir = common::scratch_dir("export-refused");
+    let baked = lamina(
+        &[
+            "export",
+            "--variant",
+            "model=tm2,mode=baked",
+            "--material",
+            "gold",
+            "--out",
+            "x",
+        ],
+        &dir,
+    );
+    assert!(!baked.status.success());
+    assert!(
+        text(&baked.stderr).contains("mode=baked"),
+        "{}",
+        text(&baked.stderr)
+    );
+    let unknown = lamina(&["export", "--material", "unobtainium", "--out", "x"], &dir);
+    assert!(!unknown.status.success());
+    assert!(text(&unknown.stderr).contains("unobtainium"));
+    assert!(
+        !dir.join("x").exists(),
+        "nothing is written when the export fails"
+    );
+}
