@@ -143,9 +143,7 @@ pub fn store(dir: &Path, key: &Key, values: &[f32]) -> crate::error::Result<Path
     let sum = checksum(&data);
     bytes.extend(&data);
     bytes.extend(sum.to_le_bytes());
-    crate::imageio::write_atomically(&path, |temp| {
-        std::fs::write(temp, &bytes).map_err(|e| e.to_string())
-    })?;
+    crate::imageio::write_file_atomically(&path, &bytes)?;
     remove_stale(dir, key);
     Ok(path)
 }

@@ -4,10 +4,10 @@
 //! analysers that take no specialization data.
 
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
-use lamina::imageio::write_atomically;
+use lamina::imageio::write_file_atomically;
 use lamina::material::resolve_with_variant;
 use lamina::profile::plan::Case;
 use lamina::render::forward;
@@ -77,7 +77,7 @@ pub fn run(args: &ExportArgs) -> Result<()> {
         let frozen = freeze(&words, &values).with_context(|| format!("freezing {entry}"))?;
         let file = format!("{}.spv", entry.trim_end_matches(".glsl"));
         let bytes: &[u8] = bytemuck::cast_slice(&frozen);
-        write(&args.out.join(&file), bytes)?;
+        write_file_atomically(&args.out.join(&file), bytes)?;
         modules.push(Module {
             entry: entry.to_string(),
             file,
@@ -91,7 +91,7 @@ pub fn run(args: &ExportArgs) -> Result<()> {
         constants,
     };
     let json = serde_json::to_string_pretty(&spec_file)?;
-    write(&args.out.join("spec.json"), json.as_bytes())?;
+    write_file_atomically(&args.out.join("spec.json"), json)?;
     for m in &spec_file.modules {
         println!(
             "wrote {} ({} bytes)",
@@ -122,11 +122,4 @@ fn constants(spec: &ShadeSpec) -> Vec<Constant> {
             }
         })
         .collect()
-}
-
-fn write(path: &Path, bytes: &[u8]) -> Result<()> {
-    write_atomically(path, |temp| {
-        std::fs::write(temp, bytes).map_err(|e| e.to_string())
-    })
-    .with_context(|| format!("writing {}", path.display()))
 }

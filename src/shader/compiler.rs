@@ -439,9 +439,7 @@ impl SpirvFile {
         bytes.extend(&data);
         bytes.extend(crate::cache::checksum(&data).to_le_bytes());
         let path = self.dir.join(&self.name);
-        let written = crate::imageio::write_atomically(&path, |temp| {
-            std::fs::write(temp, &bytes).map_err(|e| e.to_string())
-        });
+        let written = crate::imageio::write_file_atomically(&path, &bytes);
         if written.is_err() {
             return;
         }
