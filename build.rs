@@ -20,7 +20,10 @@ fn collect(dir: &Path, out: &mut Vec<PathBuf>) {
 }
 
 fn main() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl");
+    // Read when the script runs, not when it was compiled: one compiled script can serve two
+    // checkouts that share a target directory.
+    let manifest = std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR");
+    let root = Path::new(&manifest).join("glsl");
     println!("cargo:rerun-if-changed=glsl");
     let mut files = Vec::new();
     collect(&root, &mut files);
