@@ -184,6 +184,17 @@ axis!(
     }
 );
 
+axis!(
+    /// How a rough interface scatters in the reference (and, with issue 27's corrected
+    /// transport, in the model): `single`, the microfacet BSDF of one scattering event, which
+    /// loses what its masking removes; `multiple`, the walk on the microsurface (Heitz,
+    /// Hanika, d'Eon & Dachsbacher 2016), which conserves it.
+    Interfaces, "interfaces", {
+        Single = "single",
+        Multiple = "multiple",
+    }
+);
+
 impl Mode {
     /// Whether a pipeline of this mode is built for one material.
     pub fn per_material(self) -> bool {

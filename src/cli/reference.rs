@@ -8,8 +8,10 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use lamina::imageio::write_file_atomically;
 use lamina::material::Stack;
+use lamina::reference::flows::Side;
+use lamina::reference::walk::Walker;
 use lamina::reference::{self, Reference, Settings};
-use lamina::variant::{Axis, Model, G2};
+use lamina::variant::{Axis, Interfaces, Model, G2};
 use serde::Serialize;
 
 use super::args::CosinesArg;
@@ -28,9 +30,18 @@ pub struct ReferenceArgs {
     /// Seed of the paths: the same seed gives the same numbers on any number of threads.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Masking form of the interfaces' reflections (the model's FGD's; the variant axis g2).
+    /// Masking form of the interfaces' reflections (the model's FGD's; the variant axis g2);
+    /// `--interfaces multiple` takes only `height-correlated`, the microsurface's own.
     #[arg(long, value_name = "FORM", default_value = "height-correlated")]
     g2: String,
+    /// How rough interfaces scatter: `single` (the microfacet BSDF's one event; masking loses
+    /// energy) or `multiple` (the walk on the microsurface, which conserves it).
+    #[arg(long, value_name = "MODE", default_value = "single")]
+    interfaces: String,
+    /// Also print, per boundary, side and crossing order (1, 2, 3+), the energy arriving,
+    /// sent back, passed and lost (always in the JSON).
+    #[arg(long)]
+    tally: bool,
     /// Print the JSON (with the slice and hemisphere bins) instead of a table.
     #[arg(long)]
     json: bool,
@@ -45,6 +56,9 @@ struct ReferenceReport<'a> {
     material: &'a str,
     model: String,
     g2: String,
+    interfaces: String,
+    /// Each boundary in words, by the index the samples' flows use.
+    boundaries: Vec<String>,
     paths: u64,
     seed: u64,
     /// Centres of the plane-of-incidence bins, signed θ_o in degrees (positive: mirror side).
@@ -60,14 +74,24 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
     stack.require_uniform("`lamina reference`")?;
     let cosines = args.cos.checked()?;
     let g2 = G2::parse_value(&args.g2).context("--g2")?;
+    let interfaces = Interfaces::parse_value(&args.interfaces).context("--interfaces")?;
+    if interfaces == Interfaces::Multiple && g2 != G2::HeightCorrelated {
+        anyhow::bail!(
+            "--g2 {g2} with --interfaces multiple: the microsurface walk's masking is Smith's \
+             height-correlated form; --g2 chooses the masking of --interfaces single"
+        );
+    }
     let settings = Settings {
         paths: args.paths,
         seed: args.seed,
         g2,
+        interfaces,
         media: stack.model == Model::Tm6,
     };
     settings.check()?;
     let layers = stack.params();
+    let walker = Walker::new(&layers, settings.media, g2, interfaces);
+    let boundaries: Vec<String> = (0..=layers.len()).map(|b| walker.describe(b)).collect();
     let bar = ProgressBar::new(args.paths * cosines.len() as u64);
     bar.set_style(
         ProgressStyle::with_template(
@@ -98,6 +122,8 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
         material: &stack.name,
         model: stack.model.to_string(),
         g2: g2.to_string(),
+        interfaces: interfaces.to_string(),
+        boundaries: boundaries.clone(),
         paths: args.paths,
         seed: args.seed,
         slice_theta_deg: (0..reference::SLICE_BINS)
@@ -118,14 +144,17 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
     if args.json {
         println!("{json}");
     } else {
-        print!("{}", table(&stack.name, &samples));
+        print!("{}", table(&stack.name, interfaces, &samples));
+        if args.tally {
+            print!("{}", flows_table(&boundaries, &samples));
+        }
     }
     Ok(())
 }
 
 /// R and T per view cosine with their standard errors.
-fn table(name: &str, samples: &[Reference]) -> String {
-    let mut out = format!("{name}: stochastic reference\n");
+fn table(name: &str, interfaces: Interfaces, samples: &[Reference]) -> String {
+    let mut out = format!("{name}: stochastic reference, interfaces={interfaces}\n");
     let rgb = |e: &reference::Estimate| {
         (0..3)
             .map(|c| format!("{:.4}±{:.4}", e.mean[c], e.std_error[c]))
@@ -160,6 +189,40 @@ fn table(name: &str, samples: &[Reference]) -> String {
                 s.unresolved[0],
                 s.unresolved[1],
                 s.unresolved[2]
+            ));
+        }
+    }
+    out
+}
+
+/// The flows per view cosine: per boundary, side and order, the energy arriving (per unit of
+/// incident energy, mean of RGB) and the shares of it sent back, passed and lost.
+fn flows_table(boundaries: &[String], samples: &[Reference]) -> String {
+    let mean = |v: [f64; 3]| (v[0] + v[1] + v[2]) / 3.0;
+    let mut out = String::from(
+        "energy at each boundary per crossing order (mean RGB; shares of what arrives)\n",
+    );
+    for s in samples {
+        out.push_str(&format!(
+            "cos θ {:.3}\n  {:<36} {:<10} {:>5} {:>9} {:>10} {:>8} {:>8}\n",
+            s.cos_theta, "boundary", "arrives", "order", "arriving", "sent back", "passed", "lost"
+        ));
+        for row in &s.flows {
+            let a = mean(row.flow.arriving);
+            let share = |v: [f64; 3]| 100.0 * mean(v) / a;
+            let from = match row.from {
+                Side::Above => "from above",
+                Side::Below => "from below",
+            };
+            out.push_str(&format!(
+                "  {:<36} {:<10} {:>5} {:>9.4} {:>9.1}% {:>7.1}% {:>7.1}%\n",
+                boundaries.get(row.boundary).map_or("?", String::as_str),
+                from,
+                row.order,
+                a,
+                share(row.flow.sent_back),
+                share(row.flow.passed),
+                share(row.flow.lost)
             ));
         }
     }

@@ -25,7 +25,7 @@ use crate::model::light::{
 };
 use crate::model::oracle::evaluate_model;
 use crate::model::{tir, Evaluation, LayerParams, NoTir, Tir};
-use crate::variant::{Model, Ndf, VariantKey};
+use crate::variant::{Interfaces, Model, Ndf, VariantKey};
 
 /// Grid side of each lobe's quadrature for the model's slice.
 const LOBE_GRID: u32 = 256;
@@ -211,6 +211,7 @@ pub fn compare(
         paths,
         seed,
         g2: variant.g2,
+        interfaces: Interfaces::Single,
         media: variant.model == Model::Tm6,
     };
     let fgd = ExactFgd::new(variant.g2);

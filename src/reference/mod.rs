@@ -20,6 +20,8 @@
 //!   angle).
 
 pub mod compare;
+pub mod flows;
+pub mod microsurface;
 pub mod walk;
 
 use std::f64::consts::{PI, TAU};
@@ -32,7 +34,8 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::model::random::{case_seed, Rng};
 use crate::model::LayerParams;
-use crate::variant::G2;
+use crate::variant::{Interfaces, G2};
+use flows::{FlowRow, Flows};
 use walk::{Outcome, Walker};
 
 /// Most paths per channel and view cosine a run accepts (about a day on two cores).
@@ -62,8 +65,11 @@ pub struct Settings {
     /// Paths per channel and view cosine.
     pub paths: u64,
     pub seed: u64,
-    /// Masking form of the interfaces' reflections (the model's FGD's).
+    /// Masking form of the interfaces' reflections (the model's FGD's) under
+    /// `interfaces=single`.
     pub g2: G2,
+    /// How rough interfaces scatter: single scattering or the microsurface walk.
+    pub interfaces: Interfaces,
     /// Whether the layers' media exist (the 6-flux model's).
     pub media: bool,
 }
@@ -103,6 +109,8 @@ pub struct Reference {
     pub slice: Vec<Estimate>,
     /// BRDF (sr⁻¹) per hemisphere bin, ring-major ([`hemisphere_bin`]).
     pub hemisphere: Vec<Estimate>,
+    /// Energy per path at each boundary by side and crossing order ([`flows`]).
+    pub flows: Vec<FlowRow>,
 }
 
 /// The slice bin of an outgoing direction (unit, above the surface, the view in the +x half of
@@ -194,6 +202,7 @@ struct Tally {
     unresolved: [f64; 3],
     slice: Vec<Moments>,
     hemisphere: Vec<Moments>,
+    flows: Flows,
 }
 
 impl Tally {
@@ -204,6 +213,7 @@ impl Tally {
             unresolved: [0.0; 3],
             slice: vec![Moments::default(); SLICE_BINS],
             hemisphere: vec![Moments::default(); HEMISPHERE_RINGS * HEMISPHERE_SECTORS],
+            flows: Flows::new(),
         }
     }
 
@@ -219,6 +229,7 @@ impl Tally {
         for (a, b) in self.hemisphere.iter_mut().zip(&other.hemisphere) {
             a.merge(b);
         }
+        self.flows.merge(&other.flows);
     }
 }
 
@@ -228,7 +239,7 @@ fn chunk(walker: &Walker, wi: DVec3, seed: u64, k: u64, paths: u64) -> Tally {
     let mut tally = Tally::new();
     for c in 0..3 {
         for _ in 0..paths {
-            match walker.walk(c, wi, &mut rng) {
+            match walker.walk(c, wi, &mut rng, &mut tally.flows) {
                 Outcome::Reflected(l, w) => {
                     tally.reflected.add(c, w);
                     if let Some(i) = slice_bin(l) {
@@ -261,7 +272,7 @@ pub fn simulate(
             "view cosine {mu}: a reference needs one in (0, 1]"
         )));
     }
-    let walker = Walker::new(layers, settings.media, settings.g2);
+    let walker = Walker::new(layers, settings.media, settings.g2, settings.interfaces);
     let wi = DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
     // The seed of each view cosine's paths differs, so two cosines are independent.
     let seed = settings.seed ^ mu.to_bits().rotate_left(17);
@@ -301,6 +312,7 @@ pub fn simulate(
             .iter()
             .map(|m| m.estimate(n, hemisphere_projected_solid_angle()))
             .collect(),
+        flows: total.flows.rows(n),
     }))
 }
 

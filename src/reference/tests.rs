@@ -10,13 +10,26 @@ use super::*;
 use crate::model::fgd::ExactFgd;
 use crate::model::tm2::tests::{coat, gold};
 use crate::model::{diffuse, fresnel, Fgd};
+use crate::variant::Interfaces;
 use crate::variant::VariantKey;
 
 fn run(layers: &[LayerParams], media: bool, g2: G2, mu: f64, paths: u64) -> Reference {
+    run_in(Interfaces::Single, layers, media, g2, mu, paths)
+}
+
+fn run_in(
+    interfaces: Interfaces,
+    layers: &[LayerParams],
+    media: bool,
+    g2: G2,
+    mu: f64,
+    paths: u64,
+) -> Reference {
     let settings = Settings {
         paths,
         seed: 0x5eed,
         g2,
+        interfaces,
         media,
     };
     simulate(layers, &settings, mu, &mut |_| {}, &AtomicBool::new(false))
@@ -230,6 +243,7 @@ fn settings_out_of_range_are_refused() {
             paths,
             seed: 1,
             g2: G2::Smith,
+            interfaces: Interfaces::Single,
             media: false,
         };
         let err = simulate(&[gold(0.1)], &settings, 0.5, &mut |_| {}, &stop).unwrap_err();
@@ -239,6 +253,7 @@ fn settings_out_of_range_are_refused() {
         paths: 10,
         seed: 1,
         g2: G2::Smith,
+        interfaces: Interfaces::Single,
         media: false,
     };
     for mu in [0.0, 1.5, f64::NAN] {
@@ -334,4 +349,135 @@ fn the_model_slice_bins_each_lobe() {
         lo <= 0.6_f64.acos() && 0.6_f64.acos() <= hi,
         "peak at [{lo}, {hi}]"
     );
+}
+
+#[test]
+fn a_lossless_rough_slab_reflects_and_transmits_everything_in_multiple() {
+    // Rough interfaces walked on their microsurface lose nothing: a glass slab in air (two
+    // rough interfaces, one seen from inside), and a slab under a second, index-mismatched
+    // coat, reflect and transmit all the light, R + T + unresolved = 1 up to rounding, at
+    // any roughness and angle.
+    for alpha in [0.05, 0.5, 1.0] {
+        let slab = [coat(1.5, alpha), coat(1.0, alpha)];
+        let coated = [coat(1.3, 0.2), coat(1.8, alpha), coat(1.0, 0.7)];
+        for stack in [&slab[..], &coated[..]] {
+            for mu in [1.0, 0.4, 0.05] {
+                let r = run_in(
+                    Interfaces::Multiple,
+                    stack,
+                    false,
+                    G2::HeightCorrelated,
+                    mu,
+                    4_000,
+                );
+                for c in 0..3 {
+                    let sum = r.reflectance.mean[c] + r.transmittance.mean[c] + r.unresolved[c];
+                    assert!((sum - 1.0).abs() < 1e-9, "α {alpha}, μ {mu}: R + T = {sum}");
+                }
+                // What the interfaces did: nothing lost at any of them.
+                for row in &r.flows {
+                    assert!(row.flow.lost.iter().all(|l| l.abs() < 1e-12), "{row:?}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn both_interface_modes_agree_as_roughness_vanishes() {
+    let stack = [coat(1.5, 1e-3), coat(1.2, 1e-3), gold(1e-3)];
+    for mu in [0.9, 0.3] {
+        let single = run_in(
+            Interfaces::Single,
+            &stack,
+            false,
+            G2::HeightCorrelated,
+            mu,
+            40_000,
+        );
+        let multiple = run_in(
+            Interfaces::Multiple,
+            &stack,
+            false,
+            G2::HeightCorrelated,
+            mu,
+            40_000,
+        );
+        for c in 0..3 {
+            let (a, b) = (single.reflectance, multiple.reflectance);
+            let se = a.std_error[c].hypot(b.std_error[c]);
+            assert!(
+                (a.mean[c] - b.mean[c]).abs() <= 4.0 * se,
+                "μ {mu}, channel {c}: single {} multiple {} ± {se}",
+                a.mean[c],
+                b.mean[c]
+            );
+        }
+    }
+    // …and part as it grows: the microsurface keeps what single scattering's masking loses.
+    let rough = [coat(1.5, 0.5), gold(0.6)];
+    let single = run_in(
+        Interfaces::Single,
+        &rough,
+        false,
+        G2::HeightCorrelated,
+        0.5,
+        20_000,
+    );
+    let multiple = run_in(
+        Interfaces::Multiple,
+        &rough,
+        false,
+        G2::HeightCorrelated,
+        0.5,
+        20_000,
+    );
+    assert!(multiple.reflectance.mean[0] > single.reflectance.mean[0] + 0.05);
+}
+
+#[test]
+fn the_flows_of_a_smooth_coat_over_a_lambertian_base_are_the_closed_form() {
+    // Top interface from above, first arrival: everything arrives, F(μ) is sent back. The
+    // base's first arrival is 1 − F(μ), of which ρ comes back up; from below, every arrival
+    // at the interface is diffuse light, of which the coat sends back K = 1 − (1 − F̄)/n².
+    let n = 1.5;
+    let rho = [0.2, 0.5, 0.9];
+    let base = LayerParams {
+        diffuse: Some(rho),
+        ..coat(1.0, 0.0)
+    };
+    let k = 1.0 - (1.0 - diffuse::fresnel_hemispherical(n)) / (n * n);
+    let mu = 0.6;
+    let f = fresnel::dielectric(mu, n);
+    let paths = 40_000.0;
+    let r = run(&[coat(n, 0.0), base], false, G2::Smith, mu, paths as u64);
+    let row = |b: usize, from: flows::Side, order: &str| {
+        r.flows
+            .iter()
+            .find(|row| row.boundary == b && row.from == from && row.order == order)
+            .unwrap_or_else(|| panic!("no row {b} {from:?} {order}"))
+            .flow
+    };
+    // A share p of N Bernoulli arrivals has standard error √(p(1−p)/N).
+    let share = |what: &str, got: f64, arriving: f64, p: f64| {
+        let se = (p * (1.0 - p) / (arriving * paths)).sqrt();
+        assert!(
+            (got / arriving - p).abs() <= 4.0 * se,
+            "{what}: {} against {p}",
+            got / arriving
+        );
+    };
+    for (c, &rho) in rho.iter().enumerate() {
+        let top = row(0, flows::Side::Above, "1");
+        assert_eq!(top.arriving[c], 1.0);
+        share("top, sent back", top.sent_back[c], 1.0, f);
+        let base = row(1, flows::Side::Above, "1");
+        share("base, first arrival", base.arriving[c], 1.0, 1.0 - f);
+        assert!((base.sent_back[c] - rho * base.arriving[c]).abs() < 1e-9);
+        for order in ["1", "2"] {
+            let up = row(0, flows::Side::Below, order);
+            share("inside, sent back", up.sent_back[c], up.arriving[c], k);
+            assert_eq!(up.lost[c], 0.0);
+        }
+    }
 }

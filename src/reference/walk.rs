@@ -7,17 +7,26 @@
 //! the view, and ends when it leaves above (reflected) or below (transmitted), is absorbed, or
 //! loses its energy to the interfaces' single scattering.
 //!
-//! Each boundary event is the single-scattering microfacet BSDF (Walter et al. 2007) sampled
-//! through its visible normals (Heitz 2018, [`microfacet::sample_vndf`]): at a normal m drawn
-//! for the incident direction, reflect with probability F(i·m) (exact dielectric Fresnel,
-//! total internal reflection included) or refract. The path keeps G2/G1(i): the reflection
-//! masking of the model's FGD (the `g2` form) for reflections, separable Smith G1(o) for
-//! transmissions (Walter's form; the model has no transmission masking: it sets t = 1 − r). A
-//! direction sampled below the side it should leave by is single scattering's loss. The
-//! conductor reflects with its exact complex Fresnel and the same masking; the Lambertian base
-//! reflects its albedo into a cosine-distributed direction. In a medium, flight distances are
-//! drawn from the extinction, each collision keeps the single-scattering albedo σs/σt and
-//! turns the path by Henyey–Greenstein's phase function.
+//! A rough boundary scatters in one of two modes ([`Interfaces`]):
+//! - `single`: the single-scattering microfacet BSDF (Walter et al. 2007) sampled through its
+//!   visible normals (Heitz 2018, [`microfacet::sample_vndf`]): at a normal m drawn for the
+//!   incident direction, reflect with probability F(i·m) (exact dielectric Fresnel, total
+//!   internal reflection included) or refract. The path keeps G2/G1(i): the reflection masking
+//!   of the model's FGD (the `g2` form) for reflections, separable Smith G1(o) for
+//!   transmissions (Walter's form; the model has no transmission masking: it sets t = 1 − r).
+//!   A direction sampled below the side it should leave by is single scattering's loss. The
+//!   conductor reflects with its exact complex Fresnel and the same masking.
+//! - `multiple`: the walk on the microsurface ([`microsurface`]), which loses nothing to
+//!   masking (its masking is Smith's height-correlated form whatever `g2` says).
+//!
+//! The Lambertian base reflects its albedo into a cosine-distributed direction. In a medium,
+//! flight distances are drawn from the extinction, each collision keeps the single-scattering
+//! albedo σs/σt and turns the path by Henyey–Greenstein's phase function. Every arrival at a
+//! boundary is tallied by its order ([`flows`]).
+//!
+//! [`microfacet::sample_vndf`]: crate::model::microfacet::sample_vndf
+//! [`microsurface`]: super::microsurface
+//! [`flows`]: super::flows
 
 use glam::DVec3;
 
@@ -25,7 +34,10 @@ use crate::model::fresnel;
 use crate::model::microfacet::{masking_shadowing, reflect, sample_vndf, smith_lambda};
 use crate::model::random::Rng;
 use crate::model::{LayerParams, INDEX_MATCHED, IOR_AIR};
-use crate::variant::G2;
+use crate::variant::{Interfaces, G2};
+
+use super::flows::{Arrivals, Fate, Flows, Side, MAX_BOUNDARIES};
+use super::microsurface::{self, Exit};
 
 /// Events (boundary crossings and collisions) after which a path is given up and its energy
 /// counted as unresolved rather than guessed: a path in a thick, nearly lossless medium can
@@ -83,13 +95,24 @@ pub struct Walker {
     boundaries: Vec<Boundary>,
     slabs: Vec<Slab>,
     g2: G2,
+    interfaces: Interfaces,
+}
+
+/// What a boundary did with a path.
+enum Event {
+    /// It left along this direction with this fraction of its energy.
+    Out(DVec3, f64),
+    /// Lost to single scattering (or a walk's direction out of its side).
+    Lost,
+    /// A microsurface walk gave up, with this fraction of the energy.
+    Unresolved(f64),
 }
 
 impl Walker {
     /// The stack `layers` (top first, as the model takes it); `media`: whether the layers'
     /// media exist (the 6-flux model's; the 2-flux model has none); `g2`: the reflection
-    /// masking form.
-    pub fn new(layers: &[LayerParams], media: bool, g2: G2) -> Self {
+    /// masking form of `single` interfaces; `interfaces`: how rough boundaries scatter.
+    pub fn new(layers: &[LayerParams], media: bool, g2: G2, interfaces: Interfaces) -> Self {
         let mut boundaries = Vec::with_capacity(layers.len() + 1);
         let mut slabs = Vec::with_capacity(layers.len());
         let mut above = IOR_AIR;
@@ -131,10 +154,27 @@ impl Walker {
         if slabs.len() == boundaries.len() {
             boundaries.push(Boundary::Open);
         }
+        debug_assert!(boundaries.len() <= MAX_BOUNDARIES);
         Self {
             boundaries,
             slabs,
             g2,
+            interfaces,
+        }
+    }
+
+    /// Boundary `b` in words, for the flows' table ("1.50 → 1.00, α 0.20").
+    pub fn describe(&self, b: usize) -> String {
+        match self.boundaries.get(b) {
+            Some(Boundary::Dielectric {
+                above,
+                below,
+                alpha,
+            }) => format!("interface {above:.2} → {below:.2}, α {alpha:.2}"),
+            Some(Boundary::Pass) => "index-matched interface".into(),
+            Some(Boundary::Conductor { alpha, .. }) => format!("conductor base, α {alpha:.2}"),
+            Some(Boundary::Lambert(_)) => "Lambertian base".into(),
+            Some(Boundary::Open) | None => "open bottom".into(),
         }
     }
 
@@ -144,35 +184,41 @@ impl Walker {
     }
 
     /// One path of channel `c` (0, 1, 2) for light arriving against the view `wi` (unit,
-    /// wi.z > 0).
-    pub fn walk(&self, c: usize, wi: DVec3, rng: &mut Rng) -> Outcome {
+    /// wi.z > 0), its arrivals at the boundaries recorded in `flows`.
+    pub fn walk(&self, c: usize, wi: DVec3, rng: &mut Rng, flows: &mut Flows) -> Outcome {
         let mut d = -wi;
         let mut w = 1.0;
         let mut b = 0;
         let mut events = 0;
+        let mut arrivals = Arrivals::new();
         loop {
             // At boundary b, travelling along d.
-            let (next, factor) = match self.boundaries[b] {
-                Boundary::Pass => (d, 1.0),
+            let event = match self.boundaries[b] {
+                Boundary::Pass => Event::Out(d, 1.0),
                 Boundary::Open => return Outcome::Transmitted(d, w),
-                Boundary::Dielectric {
-                    above,
-                    below,
-                    alpha,
-                } => match dielectric(d, above, below, alpha, self.g2, rng) {
-                    Some(event) => event,
-                    None => return Outcome::Lost,
-                },
-                Boundary::Conductor { eta, kappa, alpha } => {
-                    match conductor(d, eta[c], kappa[c], alpha, self.g2, rng) {
-                        Some(event) => event,
-                        None => return Outcome::Lost,
-                    }
+                boundary => {
+                    let event = self.scatter(boundary, c, d, rng);
+                    let from = if d.z < 0.0 { Side::Above } else { Side::Below };
+                    let fate = match event {
+                        Event::Out(next, f) if (next.z > 0.0) != (d.z > 0.0) => {
+                            Fate::SentBack(w * f)
+                        }
+                        Event::Out(_, f) => Fate::Passed(w * f),
+                        Event::Lost => Fate::Lost,
+                        Event::Unresolved(_) => Fate::Unresolved,
+                    };
+                    flows.record(c, b, from, arrivals.next(b, from), w, fate);
+                    event
                 }
-                Boundary::Lambert(rho) => (lambert(rng), rho[c]),
             };
-            d = next;
-            w *= factor;
+            match event {
+                Event::Out(next, factor) => {
+                    d = next;
+                    w *= factor;
+                }
+                Event::Lost => return Outcome::Lost,
+                Event::Unresolved(factor) => return Outcome::Unresolved(w * factor),
+            }
             if !roulette(&mut w, rng) {
                 return Outcome::Lost;
             }
@@ -194,6 +240,62 @@ impl Walker {
             if events >= MAX_EVENTS {
                 return Outcome::Unresolved(w);
             }
+        }
+    }
+
+    /// Boundary `boundary` hit along `d` in channel `c`.
+    fn scatter(&self, boundary: Boundary, c: usize, d: DVec3, rng: &mut Rng) -> Event {
+        let single = |event: Option<(DVec3, f64)>| match event {
+            Some((next, f)) => Event::Out(next, f),
+            None => Event::Lost,
+        };
+        match (boundary, self.interfaces) {
+            (Boundary::Lambert(rho), _) => Event::Out(lambert(rng), rho[c]),
+            (
+                Boundary::Dielectric {
+                    above,
+                    below,
+                    alpha,
+                },
+                Interfaces::Single,
+            ) => single(dielectric(d, above, below, alpha, self.g2, rng)),
+            (Boundary::Conductor { eta, kappa, alpha }, Interfaces::Single) => {
+                single(conductor(d, eta[c], kappa[c], alpha, self.g2, rng))
+            }
+            (
+                Boundary::Dielectric {
+                    above,
+                    below,
+                    alpha,
+                },
+                Interfaces::Multiple,
+            ) => {
+                let from_below = d.z > 0.0;
+                let wi = to_side(-d, from_below);
+                if wi.z <= 0.0 {
+                    return Event::Lost;
+                }
+                let eta = if from_below {
+                    above / below
+                } else {
+                    below / above
+                };
+                match microsurface::dielectric(wi, eta, alpha, rng) {
+                    Exit::Left(wo, f) => Event::Out(to_side(wo, from_below), f),
+                    Exit::Unresolved(f) => Event::Unresolved(f),
+                }
+            }
+            (Boundary::Conductor { eta, kappa, alpha }, Interfaces::Multiple) => {
+                if d.z >= 0.0 {
+                    return Event::Lost;
+                }
+                match microsurface::conductor(-d, eta[c], kappa[c], alpha, rng) {
+                    Exit::Left(wo, f) => Event::Out(wo, f),
+                    Exit::Unresolved(f) => Event::Unresolved(f),
+                }
+            }
+            // Neither scatters: light goes on as it came.
+            (Boundary::Pass | Boundary::Open, _) => Event::Out(d, 1.0),
         }
     }
 

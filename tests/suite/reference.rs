@@ -17,6 +17,14 @@ fn bad_arguments_are_refused_by_name() {
         (vec!["--cos", "0"], "--cos: 0"),
         (vec!["--cos", "1.2"], "--cos: 1.2"),
         (vec!["--g2", "beckmann"], "--g2"),
+        (
+            vec!["--interfaces", "double"],
+            "`interfaces` has no value `double`; allowed: single, multiple",
+        ),
+        (
+            vec!["--interfaces", "multiple", "--g2", "smith"],
+            "--g2 smith with --interfaces multiple",
+        ),
     ] {
         let mut full = vec!["reference", "--material", "gold"];
         if !args.contains(&"--cos") {
@@ -70,6 +78,55 @@ fn the_json_holds_every_estimate_and_the_file_is_the_same() {
         assert!(r > 0.1 && r < 1.0 && se > 0.0 && se < 0.05, "{r} ± {se}");
         assert_eq!(s["slice"].as_array().unwrap().len(), 90);
         assert_eq!(s["hemisphere"].as_array().unwrap().len(), 16 * 32);
+    }
+}
+
+#[test]
+fn the_tally_shows_what_each_interface_sends_back_and_loses() {
+    // Varnished gold: under single scattering the coat loses light to masking where light
+    // crosses it upward; on the microsurface it loses none, and the JSON keeps every row.
+    let dir = common::scratch_dir("reference-tally");
+    for (mode, lossy) in [("single", true), ("multiple", false)] {
+        let out = lamina(
+            &[
+                "reference",
+                "--material",
+                "varnished-gold",
+                "--cos",
+                "0.5",
+                "--paths",
+                "20000",
+                "--interfaces",
+                mode,
+                "--tally",
+                "--out",
+                "r.json",
+            ],
+            &dir,
+        );
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(text.contains(&format!("interfaces={mode}")), "{text}");
+        let up = text
+            .lines()
+            .find(|l| {
+                l.contains("interface 1.00 → 1.50") && l.contains("from below") && l.contains(" 2 ")
+            })
+            .unwrap_or_else(|| panic!("no second upward crossing in {text}"));
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("r.json")).unwrap()).unwrap();
+        assert_eq!(json["interfaces"], mode);
+        let flows = json["samples"][0]["flows"].as_array().unwrap();
+        let lost: f64 = flows
+            .iter()
+            .filter(|f| f["boundary"] == 0 && f["from"] == "below")
+            .map(|f| f["lost"][0].as_f64().unwrap())
+            .sum();
+        assert_eq!(lost > 1e-4, lossy, "{mode}: lost {lost}; {up}");
     }
 }
 
