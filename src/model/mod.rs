@@ -12,6 +12,7 @@
 //! κ_{i+1}/η_i; roughness is GGX α.
 
 pub(crate) mod adding;
+pub mod angular;
 pub mod diffuse;
 pub mod fgd;
 pub mod fresnel;
@@ -19,6 +20,7 @@ pub mod hg;
 pub mod light;
 pub mod medium;
 pub mod microfacet;
+pub mod microsurface;
 pub mod oracle;
 pub mod random;
 pub mod tir;

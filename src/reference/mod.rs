@@ -21,7 +21,6 @@
 
 pub mod compare;
 pub mod flows;
-pub mod microsurface;
 pub mod walk;
 
 use std::f64::consts::{PI, TAU};

@@ -25,7 +25,7 @@
 //! boundary is tallied by its order ([`flows`]).
 //!
 //! [`microfacet::sample_vndf`]: crate::model::microfacet::sample_vndf
-//! [`microsurface`]: super::microsurface
+//! [`microsurface`]: crate::model::microsurface
 //! [`flows`]: super::flows
 
 use glam::DVec3;
@@ -37,7 +37,7 @@ use crate::model::{LayerParams, INDEX_MATCHED, IOR_AIR};
 use crate::variant::{Interfaces, G2};
 
 use super::flows::{Arrivals, Fate, Flows, Side, MAX_BOUNDARIES};
-use super::microsurface::{self, Exit};
+use crate::model::microsurface::{self, Exit};
 
 /// Events (boundary crossings and collisions) after which a path is given up and its energy
 /// counted as unresolved rather than guessed: a path in a thick, nearly lossless medium can

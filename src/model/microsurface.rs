@@ -1,6 +1,6 @@
 //! The random walk on a rough interface's microsurface (Heitz, Hanika, d'Eon & Dachsbacher
 //! 2016, "Multiple-scattering microfacet BSDFs with the Smith model"): the interface mode
-//! `interfaces=multiple` of the reference.
+//! `interfaces=multiple` of the reference's walk and of the discrete-ordinates transport.
 //!
 //! The microsurface is the Smith model's: microfacet normals from the GGX distribution, heights
 //! independent of the normals, and a ray meets the surface as Smith's masking says — a ray
