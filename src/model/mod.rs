@@ -27,6 +27,7 @@ pub mod tir;
 pub mod tir_fit;
 pub mod tm2;
 pub mod tm6;
+pub mod transport;
 
 /// IOR of the medium above the top layer. lamina uses vacuum (1.0), so a single conductor layer
 /// has exactly the F0 the `ggx` baseline uses; the reference's Mitsuba air is 1.000277.
@@ -173,6 +174,9 @@ pub struct Evaluation {
     /// included). TM6: per component, primary then secondary-forward then secondary-backward,
     /// as the reference emits them.
     pub lobes: Vec<Lobe>,
+    /// The layer each lobe belongs to (the layer whose interface, medium or base emitted it),
+    /// lobe by lobe; empty in an evaluation read back from the GPU, which does not report it.
+    pub lobe_layers: Vec<usize>,
     /// Bit k: lobe k is centred on the view rather than its mirror direction (a 6-flux
     /// secondary-backward lobe, lit around the view; the first 32 lobes).
     pub retro_mask: u32,

@@ -27,6 +27,7 @@ enum Step {
 pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn Tir) -> Evaluation {
     let mut walk = Walk::new(cos_theta);
     for (i, layer) in stack.iter().enumerate() {
+        walk.layer = i;
         if let Some(rho) = layer.diffuse {
             walk.diffuse_base(&stack[..i], rho);
             break;
@@ -61,6 +62,9 @@ struct Walk {
     cos_i: f64,
     transmittance: Rgb,
     lobes: Vec<Lobe>,
+    /// The layer whose components are being added, and each lobe's.
+    layer: usize,
+    lobe_layers: Vec<usize>,
     retro_mask: u32,
 }
 
@@ -79,6 +83,8 @@ impl Walk {
             cos_i: cos_theta,
             transmittance: [0.0; 3],
             lobes: Vec::new(),
+            layer: 0,
+            lobe_layers: Vec::new(),
             retro_mask: 0,
         }
     }
@@ -94,6 +100,7 @@ impl Walk {
             roughness: 1.0,
             diffuse: true,
         });
+        self.lobe_layers.push(self.layer);
         self.prev[0] = map3(|c| self.prev[0][c] + weight[c]);
         self.transmittance = [0.0; 3];
     }
@@ -244,6 +251,7 @@ impl Walk {
                     roughness: hg::alpha_of_g(g_lobe.min(1.0)),
                     diffuse: false,
                 });
+                self.lobe_layers.push(self.layer);
             }
             self.prev[k] = up[k];
             self.prev_g[k] = up_g[k];
@@ -256,6 +264,7 @@ impl Walk {
             reflectance: map3(|c| prev[0][c] + prev[1][c] + prev[2][c]),
             transmittance: self.transmittance,
             lobes: self.lobes,
+            lobe_layers: self.lobe_layers,
             retro_mask: self.retro_mask,
         }
     }

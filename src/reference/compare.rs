@@ -24,6 +24,7 @@ use crate::model::light::{
     for_each_lobe_direction, lobe_albedo, lobe_view, unnormalised_lobe, LobeKind, MIN_ALPHA,
 };
 use crate::model::oracle::evaluate_model;
+use crate::model::transport::Correction;
 use crate::model::{tir, Evaluation, LayerParams, NoTir, Tir};
 use crate::variant::{Interfaces, Model, Ndf, VariantKey};
 
@@ -48,8 +49,18 @@ pub struct MaterialReference {
     pub material: String,
     pub model: String,
     pub variant: String,
+    /// The reference's interface mode (the truth), and the corrected model's.
+    #[serde(default = "single")]
+    pub interfaces: String,
+    /// Layers in the stack (a coated stack has more than one).
+    #[serde(default)]
+    pub layers: usize,
     pub paths: u64,
     pub rows: Vec<ReferenceRow>,
+}
+
+fn single() -> String {
+    Interfaces::Single.to_string()
 }
 
 /// The model and the reference at one view cosine.
@@ -64,10 +75,17 @@ pub struct ReferenceRow {
     pub model: [f64; 3],
     /// The same without the TIR correction.
     pub model_no_tir: [f64; 3],
+    /// The model with `transport=corrected` (`model::transport`) in the reference's
+    /// interface mode.
+    #[serde(default)]
+    pub model_corrected: [f64; 3],
     /// BRDF per plane-of-incidence bin (`reference::slice_bin`): the reference's…
     pub slice_reference: Vec<Estimate>,
-    /// …and the model's.
+    /// …and the model's…
     pub slice_model: Vec<[f64; 3]>,
+    /// …and the corrected model's.
+    #[serde(default)]
+    pub slice_corrected: Vec<[f64; 3]>,
 }
 
 fn mean3(v: [f64; 3]) -> f64 {
@@ -87,16 +105,34 @@ impl ReferenceRow {
         (mean3(self.model_no_tir) - r) / r
     }
 
+    /// The same for the corrected model.
+    pub fn relative_error_corrected(&self) -> f64 {
+        let r = mean3(self.reference.mean);
+        (mean3(self.model_corrected) - r) / r
+    }
+
+    /// The largest of the channels' relative errors of `model` (in magnitude, signed).
+    pub fn worst_channel(&self, model: [f64; 3]) -> f64 {
+        (0..3)
+            .map(|c| (model[c] - self.reference.mean[c]) / self.reference.mean[c].max(1e-12))
+            .fold(0.0, |a: f64, e| if e.abs() > a.abs() { e } else { a })
+    }
+
     /// The slice's relative L1 error, Σ |f_model − f_ref| Ω⊥ / Σ f_ref Ω⊥ over the bins
     /// (channels' mean), and the part of it the reference's own noise explains (the expected
     /// |error| of a normal estimate, √(2/π) σ, summed the same way).
     pub fn slice_error(&self) -> (f64, f64) {
+        self.slice_error_of(&self.slice_model)
+    }
+
+    /// [`Self::slice_error`] of another model's slice (the corrected model's).
+    pub fn slice_error_of(&self, slice: &[[f64; 3]]) -> (f64, f64) {
         let (mut diff, mut noise, mut total) = (0.0, 0.0, 0.0);
-        for i in 0..SLICE_BINS {
+        for (i, model) in slice.iter().enumerate().take(SLICE_BINS) {
             let omega = slice_projected_solid_angle(i);
             let r = mean3(self.slice_reference[i].mean);
             let se = mean3(self.slice_reference[i].std_error) / 3f64.sqrt();
-            diff += (mean3(self.slice_model[i]) - r).abs() * omega;
+            diff += (mean3(*model) - r).abs() * omega;
             noise += (2.0 / PI).sqrt() * se * omega;
             total += r * omega;
         }
@@ -196,12 +232,15 @@ fn bin_integral(i: usize, g: &impl Fn(DVec3) -> f64) -> f64 {
 }
 
 /// The model against the reference for one material (`layers`, named `name`) in `variant`'s
-/// model with its masking form, at each view cosine, the reference following `paths` paths
-/// per channel from `seed`; `None` when `stop` was set.
+/// model with its masking form, at each view cosine, the reference in interface mode
+/// `interfaces` following `paths` paths per channel from `seed`; `None` when `stop` was set.
+/// The paper's model is the same in both modes; the corrected model takes the reference's.
+#[allow(clippy::too_many_arguments)]
 pub fn compare(
     name: &str,
     layers: &[LayerParams],
     variant: VariantKey,
+    interfaces: Interfaces,
     cosines: &[f64],
     (paths, seed): (u64, u64),
     progress: &mut dyn FnMut(u64),
@@ -211,10 +250,11 @@ pub fn compare(
         paths,
         seed,
         g2: variant.g2,
-        interfaces: Interfaces::Single,
+        interfaces,
         media: variant.model == Model::Tm6,
     };
     let fgd = ExactFgd::new(variant.g2);
+    let correction = Correction::new(layers, variant.model, interfaces, &fgd, &ExactTir);
     let mut rows = Vec::with_capacity(cosines.len());
     for (j, &mu) in cosines.iter().enumerate() {
         let before = j as u64 * paths;
@@ -224,20 +264,26 @@ pub fn compare(
         };
         let model = evaluate_model(variant.model, layers, mu, &fgd, &ExactTir);
         let model_no_tir = evaluate_model(variant.model, layers, mu, &fgd, &NoTir);
+        let mut corrected = model.clone();
+        correction.apply(&mut corrected, mu);
         rows.push(ReferenceRow {
             cos_theta: mu,
             reference: reference.reflectance,
             unresolved: reference.unresolved,
             model: model.reflectance,
             model_no_tir: model_no_tir.reflectance,
+            model_corrected: corrected.reflectance,
             slice_reference: reference.slice,
             slice_model: model_slice(&model, mu, variant),
+            slice_corrected: model_slice(&corrected, mu, variant),
         });
     }
     Ok(Some(MaterialReference {
         material: name.to_owned(),
         model: variant.model.to_string(),
         variant: variant.to_string(),
+        interfaces: interfaces.to_string(),
+        layers: layers.len(),
         paths,
         rows,
     }))

@@ -288,6 +288,7 @@ fn the_model_meets_the_reference_where_it_is_exact() {
         "smooth",
         &stack,
         variant,
+        Interfaces::Single,
         &cosines,
         (20_000, 3),
         &mut |_| {},

@@ -305,6 +305,8 @@ fn unpack(chunk: &[[f32; 4]]) -> GpuEvaluation {
                     diffuse: v[3] < 0.0,
                 })
                 .collect(),
+            // The kernel does not report which layer emitted each lobe.
+            lobe_layers: Vec::new(),
             // The kernel stores the mask's bits, not a value (tm_eval.comp.glsl).
             retro_mask: chunk[1][3].to_bits(),
         },

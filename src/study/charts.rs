@@ -147,8 +147,9 @@ fn pareto_series(
 }
 
 /// The file stem of a material's chart in a `[reference]` study: `reference-` and the name's
-/// letters and digits, the rest as `-`.
-pub fn reference_chart_stem(material: &str) -> String {
+/// letters and digits, the rest as `-`; `-multiple` after it against the multiple-scattering
+/// truth.
+pub fn reference_chart_stem(material: &str, interfaces: &str) -> String {
     let name: String = material
         .chars()
         .map(|c| {
@@ -159,7 +160,11 @@ pub fn reference_chart_stem(material: &str) -> String {
             }
         })
         .collect();
-    format!("reference-{name}")
+    if interfaces == "single" {
+        format!("reference-{name}")
+    } else {
+        format!("reference-{name}-{interfaces}")
+    }
 }
 
 /// A material's BRDF in the plane of incidence, per view cosine: the model's curve and the
@@ -173,7 +178,7 @@ pub fn reference_chart(e: &MaterialReference) -> XyChart {
     let mut series = Vec::new();
     for (j, row) in e.rows.iter().enumerate() {
         series.push(XySeries {
-            label: format!("model, cos θ = {:.2}", row.cos_theta),
+            label: format!("paper, cos θ = {:.2}", row.cos_theta),
             points: row
                 .slice_model
                 .iter()
@@ -197,11 +202,24 @@ pub fn reference_chart(e: &MaterialReference) -> XyChart {
             line: false,
             colour: j,
         });
+        if !row.slice_corrected.is_empty() {
+            series.push(XySeries {
+                label: format!("corrected, cos θ = {:.2}", row.cos_theta),
+                points: row
+                    .slice_corrected
+                    .iter()
+                    .enumerate()
+                    .map(|(i, v)| (centre(i), mean(*v), 0.0, 0.0))
+                    .collect(),
+                line: true,
+                colour: j + e.rows.len(),
+            });
+        }
     }
     XyChart {
         title: format!(
-            "{} ({}) — BRDF in the plane of incidence",
-            e.material, e.model
+            "{} ({}) — BRDF in the plane of incidence, interfaces={}",
+            e.material, e.model, e.interfaces
         ),
         x_label: "θ_o (degrees; positive: mirror side)".into(),
         y_label: "BRDF (1/sr), mean of RGB".into(),

@@ -13,7 +13,7 @@ use crate::profile::plan::{Case, Plan};
 use crate::render::lights::{Lighting, PRESETS};
 use crate::render::scene::Scene;
 use crate::size::Size;
-use crate::variant::{Mode, Model, VariantKey, AXES};
+use crate::variant::{Axis, Interfaces, Mode, Model, VariantKey, AXES};
 
 use super::file::{bad, read, BakeErrorSpec, ReferenceSpec, SweepFile, Target};
 use super::{Point, ReferenceStudy, Study};
@@ -648,11 +648,29 @@ fn check_reference(
             ),
         ));
     }
+    let interfaces = match &spec.interfaces {
+        None => vec![Interfaces::Single],
+        Some(names) if names.is_empty() => {
+            return Err(bad(
+                file,
+                "reference.interfaces",
+                &format!("empty: give one or more of {}", Interfaces::allowed()),
+            ))
+        }
+        Some(names) => names
+            .iter()
+            .map(|n| {
+                Interfaces::parse_value(n)
+                    .map_err(|e| bad(file, "reference.interfaces", &e.to_string()))
+            })
+            .collect::<Result<Vec<_>>>()?,
+    };
     Ok(ReferenceStudy {
         cases: points.drain(..).map(|p| p.case).collect(),
         cosines: spec.cosines.clone(),
         paths: spec.paths,
         seed: spec.seed.unwrap_or(1),
+        interfaces,
     })
 }
 

@@ -94,6 +94,8 @@ pub struct ReferenceSpec {
     /// Paths per channel and view cosine.
     pub paths: u64,
     pub seed: Option<u64>,
+    /// The truths to compare with: the reference's interface modes (default `["single"]`).
+    pub interfaces: Option<Vec<String>>,
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]

@@ -84,13 +84,15 @@ pub struct Point {
 }
 
 /// A `[reference]` study, checked: the materials (each with its variant: model and masking
-/// form), the view cosines, the paths and the seed.
+/// form), the view cosines, the paths, the seed and the interface modes.
 #[derive(Clone, Debug)]
 pub struct ReferenceStudy {
     pub cases: Vec<Case>,
     pub cosines: Vec<f64>,
     pub paths: u64,
     pub seed: u64,
+    /// The reference's interface modes, each a truth of its own.
+    pub interfaces: Vec<crate::variant::Interfaces>,
 }
 
 /// Where a study's files go under `out`: `out` itself for a lone study, `out/NAME` for each

@@ -144,22 +144,25 @@ fn reference_comparisons(
     progress: &mut impl FnMut(&str, usize, usize),
 ) -> Result<Vec<MaterialReference>> {
     let per_material = spec.paths * spec.cosines.len() as u64;
-    let total = per_material * spec.cases.len() as u64;
+    let total = per_material * (spec.cases.len() * spec.interfaces.len()) as u64;
     let never = AtomicBool::new(false);
-    let mut out = Vec::with_capacity(spec.cases.len());
-    for (i, case) in spec.cases.iter().enumerate() {
-        let before = i as u64 * per_material;
-        let compared = crate::reference::compare::compare(
-            &case.stack.name,
-            &case.stack.params(),
-            case.variant,
-            &spec.cosines,
-            (spec.paths, spec.seed),
-            &mut |paths| progress("reference paths", (before + paths) as usize, total as usize),
-            &never,
-        )?
-        .expect("a reference study is never stopped");
-        out.push(compared);
+    let mut out = Vec::with_capacity(spec.cases.len() * spec.interfaces.len());
+    for &interfaces in &spec.interfaces {
+        for case in &spec.cases {
+            let before = out.len() as u64 * per_material;
+            let compared = crate::reference::compare::compare(
+                &case.stack.name,
+                &case.stack.params(),
+                case.variant,
+                interfaces,
+                &spec.cosines,
+                (spec.paths, spec.seed),
+                &mut |paths| progress("reference paths", (before + paths) as usize, total as usize),
+                &never,
+            )?
+            .expect("a reference study is never stopped");
+            out.push(compared);
+        }
     }
     Ok(out)
 }
@@ -362,6 +365,10 @@ fn prebuild_tables(run: &SuiteRun<'_>, studies: &[Study]) -> std::result::Result
             .iter()
             .flat_map(|s| s.points.iter().map(|p| p.case.variant)),
     );
+    // A reference study alone shades nothing: there is nothing to build.
+    if variants.is_empty() {
+        return Ok(Duration::ZERO);
+    }
     let exe = std::env::current_exe()
         .map_err(|e| Error::Unsupported(format!("locating the lamina executable: {e}")))?;
     let mut worker_args = vec!["--device".to_owned(), run.gpu.device.report.name.clone()];

@@ -37,7 +37,7 @@ pub fn write(
         charts.push(path.with_extension("png"));
     }
     for e in &meta.reference {
-        let path = dir.join(reference_chart_stem(&e.material));
+        let path = dir.join(reference_chart_stem(&e.material, &e.interfaces));
         reference_chart(e).write(&path)?;
         charts.push(path.with_extension("png"));
     }

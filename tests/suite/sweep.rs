@@ -236,6 +236,18 @@ fn bad_sweep_files_are_refused_before_any_gpu_work() {
             vec!["reference.paths", "1 to"],
         ),
         ("cosines = [0.5]\n", vec!["paths"]),
+        (
+            "cosines = [0.5]\npaths = 10\ninterfaces = [\"double\"]\n",
+            vec![
+                "reference.interfaces",
+                "no value `double`",
+                "single, multiple",
+            ],
+        ),
+        (
+            "cosines = [0.5]\npaths = 10\ninterfaces = []\n",
+            vec!["reference.interfaces", "empty"],
+        ),
     ] {
         let e = load_error("reference", &format!("{reference}{body}"));
         for w in words {
@@ -272,15 +284,16 @@ fn bad_sweep_files_are_refused_before_any_gpu_work() {
     assert!(!dir.join("res").exists());
 }
 
-/// A `[reference]` study: each material's model against the stochastic reference, in the
-/// study's JSON, its charts and the report's table; nothing timed or counted.
+/// A `[reference]` study: each material's model against the stochastic reference in both
+/// truths, paper and corrected, in the study's JSON, its charts and the report's tables;
+/// nothing timed or counted.
 #[test]
 fn a_reference_study_compares_each_material_with_the_reference() {
     let dir = common::scratch_dir("sweep-reference");
     std::fs::write(
         dir.join("ref.toml"),
         "name = \"ref\"\nmaterials = [\"gold\", \"dusty-varnish\"]\ncounter = \"instructions\"\n\
-         [reference]\ncosines = [1.0, 0.4]\npaths = 2000\n",
+         [reference]\ncosines = [1.0, 0.4]\npaths = 2000\ninterfaces = [\"single\", \"multiple\"]\n",
     )
     .unwrap();
     let out = lamina(&["--validation", "sweep", "ref.toml", "--out", "res"], &dir);
@@ -289,11 +302,17 @@ fn a_reference_study_compares_each_material_with_the_reference() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("res/study.json")).unwrap())
             .unwrap();
     let compared = meta["reference"].as_array().unwrap();
-    assert_eq!(compared.len(), 2);
+    assert_eq!(compared.len(), 4);
     assert_eq!(compared[1]["model"], "tm6");
+    assert_eq!(compared[0]["interfaces"], "single");
+    assert_eq!(compared[2]["interfaces"], "multiple");
     for m in compared {
         assert_eq!(m["rows"].as_array().unwrap().len(), 2);
         assert_eq!(m["rows"][0]["slice_model"].as_array().unwrap().len(), 90);
+        assert_eq!(
+            m["rows"][0]["slice_corrected"].as_array().unwrap().len(),
+            90
+        );
     }
     // Gold alone: the model's FGD is the reference's single scattering, to its noise.
     let row = &compared[0]["rows"][0];
@@ -312,18 +331,27 @@ fn a_reference_study_compares_each_material_with_the_reference() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("res/results.json")).unwrap())
             .unwrap();
     assert!(results["runs"].as_array().unwrap().is_empty());
-    for chart in ["reference-gold", "reference-dusty-varnish"] {
+    for chart in [
+        "reference-gold",
+        "reference-dusty-varnish",
+        "reference-gold-multiple",
+        "reference-dusty-varnish-multiple",
+    ] {
         assert!(dir.join(format!("res/{chart}.png")).is_file(), "{chart}");
         assert!(dir.join(format!("res/{chart}.svg")).is_file(), "{chart}");
     }
     assert!(!dir.join("res/chart-time.png").exists());
     let report = std::fs::read_to_string(dir.join("res/REPORT.md")).unwrap();
     for expected in [
-        "| material | model | cos θ | reference R | model R | error | without TIR |",
+        "| material | model | cos θ | reference R | paper R | paper error | without TIR | \
+         corrected R | corrected error (worst channel) |",
+        "#### Against the `interfaces=single` reference",
+        "#### Against the `interfaces=multiple` reference",
         "| gold | tm2 | 1.00 |",
         "| dusty varnish | tm6 | 0.40 |",
         "of 4 (material, view) points",
         "](reference-gold.png)",
+        "](reference-gold-multiple.png)",
     ] {
         assert!(
             report.contains(expected),

@@ -1,0 +1,215 @@
+//! `transport=corrected`: the transfer-matrix model's lobes with each layer's energy taken
+//! from the discrete-ordinates transport of the same stack ([`super::angular`]), in either
+//! interface mode.
+//!
+//! The paper's model (`transport=paper`) composes each interface as one directional
+//! reflectance and 1 − r, and traps every upward crossing with the first crossing's TIR ratio.
+//! Measured against the walk, that makes every rough coat too bright (+8 … +43 % on the
+//! presets, ALGORITHMS.md §17). Remedies in the model's own terms — later crossings as a
+//! diffuse class with hemispherical constants, the first crossing's TIR ratio kept per lobe —
+//! stay short where it matters: light that total internal reflection sends back stays near
+//! grazing and a glossy base returns it near grazing, so it is trapped far more often than
+//! diffuse light and far less often than light beyond the critical angle taken as uniform;
+//! and at grazing views the lobe's centre sits at the critical angle, where Fresnel's
+//! transmission changes fastest, which one ratio per lobe cannot resolve. Light's angles
+//! must be followed, which [`super::angular`] does.
+//!
+//! So each layer's energy comes from that transport, per material, tabulated at [`POINTS`]
+//! view cosines as the ratio of its energy to the paper model's, and the model's lobes are
+//! scaled by their layer's ratio, interpolated at the view's cosine: the lobes keep the
+//! paper's shapes (their asymmetry composition), the energies follow light's angles, and a
+//! material with maps keeps its per-pixel variation (the ratio is taken at its nominal
+//! values). The stack's transmittance is scaled the same way.
+
+use super::angular::Transport;
+use super::oracle::evaluate_model;
+use super::{Evaluation, Fgd, LayerParams, Tir};
+use crate::variant::{Interfaces, Model};
+
+/// View cosines at which a material's ratios are tabulated: k/(POINTS − 1), the first at
+/// [`LOWEST`].
+pub const POINTS: usize = 16;
+
+/// The lowest tabulated view cosine (μ = 0 is no view at all).
+pub const LOWEST: f64 = 0.01;
+
+/// Largest ratio a layer takes: where the paper gives a layer almost no energy its ratio is
+/// ill-conditioned, and a map that raises that energy would carry it anywhere.
+pub const MAX_RATIO: f64 = 8.0;
+
+/// The tabulated cosine of point k.
+pub fn point(k: usize) -> f64 {
+    (k as f64 / (POINTS - 1) as f64).max(LOWEST)
+}
+
+/// One material's energy ratios.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Correction {
+    /// Per layer, per point, per channel: the transport's energy over the paper's.
+    pub layers: Vec<[[f64; 3]; POINTS]>,
+    /// Per point and channel: the same for the stack's transmittance.
+    pub transmittance: [[f64; 3]; POINTS],
+}
+
+fn ratio(truth: f64, paper: f64) -> f64 {
+    if paper > 1e-9 {
+        (truth / paper).clamp(0.0, MAX_RATIO)
+    } else {
+        1.0
+    }
+}
+
+impl Correction {
+    /// The ratios of the stack `layers` in `model` (its media exist under `tm6`), the paper's
+    /// side with the given FGD and TIR providers, the transport's in interface mode `mode`.
+    pub fn new(
+        layers: &[LayerParams],
+        model: Model,
+        mode: Interfaces,
+        fgd: &dyn Fgd,
+        tir: &dyn Tir,
+    ) -> Self {
+        let transport = Transport::new(layers, model == Model::Tm6, mode);
+        let mut per_layer = vec![[[1.0; 3]; POINTS]; layers.len()];
+        let mut transmittance = [[1.0; 3]; POINTS];
+        for k in 0..POINTS {
+            let mu = point(k);
+            let (cumulative, t) = transport.reflectances(mu);
+            let paper = evaluate_model(model, layers, mu, fgd, tir);
+            let mut energy = vec![[0.0; 3]; layers.len()];
+            for (lobe, &layer) in paper.lobes.iter().zip(&paper.lobe_layers) {
+                for (sum, w) in energy[layer].iter_mut().zip(lobe.weight) {
+                    *sum += w;
+                }
+            }
+            let mut below = [0.0; 3];
+            for (i, r) in cumulative.iter().enumerate() {
+                for c in 0..3 {
+                    per_layer[i][k][c] = ratio(r[c] - below[c], energy[i][c]);
+                }
+                below = *r;
+            }
+            transmittance[k] = std::array::from_fn(|c| ratio(t[c], paper.transmittance[c]));
+        }
+        Self {
+            layers: per_layer,
+            transmittance,
+        }
+    }
+
+    /// Layer `layer`'s ratio at view cosine `mu`, linear between the points.
+    pub fn at(&self, layer: usize, mu: f64) -> [f64; 3] {
+        self.layers
+            .get(layer)
+            .map_or([1.0; 3], |curve| interpolate(curve, mu))
+    }
+
+    /// `evaluation` (the paper's f64 model's at view cosine `mu`: its lobes' layers known)
+    /// with each lobe scaled by its layer's ratio, and R and T to match.
+    pub fn apply(&self, evaluation: &mut Evaluation, mu: f64) {
+        assert_eq!(
+            evaluation.lobes.len(),
+            evaluation.lobe_layers.len(),
+            "a corrected evaluation needs each lobe's layer (the f64 model's)"
+        );
+        let mut reflectance = [0.0; 3];
+        for (lobe, &layer) in evaluation.lobes.iter_mut().zip(&evaluation.lobe_layers) {
+            let r = self.at(layer, mu);
+            for c in 0..3 {
+                lobe.weight[c] *= r[c];
+                reflectance[c] += lobe.weight[c];
+            }
+        }
+        evaluation.reflectance = reflectance;
+        let t = interpolate(&self.transmittance, mu);
+        for (transmitted, ratio) in evaluation.transmittance.iter_mut().zip(t) {
+            *transmitted *= ratio;
+        }
+    }
+}
+
+/// A tabulated curve at `mu`, linear between the points, constant beyond the ends.
+fn interpolate(curve: &[[f64; 3]; POINTS], mu: f64) -> [f64; 3] {
+    let x = (mu.clamp(0.0, 1.0) * (POINTS - 1) as f64).min((POINTS - 1) as f64);
+    let k = (x as usize).min(POINTS - 2);
+    let lo = point(k);
+    let hi = point(k + 1);
+    let f = ((mu - lo) / (hi - lo)).clamp(0.0, 1.0);
+    std::array::from_fn(|c| curve[k][c] + f * (curve[k + 1][c] - curve[k][c]))
+}
+
+/// The corrected model at one view cosine (builds the material's ratios: for one cosine or
+/// a few; keep a [`Correction`] for many).
+pub fn evaluate(
+    model: Model,
+    mode: Interfaces,
+    layers: &[LayerParams],
+    mu: f64,
+    fgd: &dyn Fgd,
+    tir: &dyn Tir,
+) -> Evaluation {
+    let correction = Correction::new(layers, model, mode, fgd, tir);
+    let mut evaluation = evaluate_model(model, layers, mu, fgd, tir);
+    correction.apply(&mut evaluation, mu);
+    evaluation
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::fgd::ExactFgd;
+    use crate::model::tm2::tests::{coat, gold};
+    use crate::model::NoTir;
+    use crate::variant::G2;
+
+    #[test]
+    fn at_the_points_the_energies_are_the_transports() {
+        let fgd = ExactFgd::new(G2::HeightCorrelated);
+        let film = LayerParams {
+            depth: 0.4,
+            sigma_s: [1.0, 2.0, 0.5],
+            sigma_a: [0.3, 0.1, 0.6],
+            g: 0.4,
+            ..coat(1.5, 0.3)
+        };
+        let cases: [(&[LayerParams], Model); 3] = [
+            (&[coat(1.5, 0.05), gold(0.25)], Model::Tm2),
+            (&[film, gold(0.2)], Model::Tm6),
+            (&[film, coat(1.3, 0.1)], Model::Tm6),
+        ];
+        for (layers, model) in cases {
+            let correction = Correction::new(layers, model, Interfaces::Single, &fgd, &NoTir);
+            let transport = Transport::new(layers, model == Model::Tm6, Interfaces::Single);
+            for k in [0, 5, POINTS - 1] {
+                let mu = point(k);
+                let mut e = evaluate_model(model, layers, mu, &fgd, &NoTir);
+                correction.apply(&mut e, mu);
+                let (r, t) = transport.reflectances(mu);
+                let r = *r.last().expect("layers");
+                for c in 0..3 {
+                    assert!(
+                        (e.reflectance[c] - r[c]).abs() < 1e-9,
+                        "{model} μ {mu}: {e:?} {r:?}"
+                    );
+                    assert!(
+                        (e.transmittance[c] - t[c]).abs() < 1e-9,
+                        "{model} μ {mu}: T {t:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn between_the_points_the_ratio_is_interpolated() {
+        let mut curve = [[0.0; 3]; POINTS];
+        for (k, v) in curve.iter_mut().enumerate() {
+            *v = [point(k); 3];
+        }
+        // A ratio linear in μ is reproduced exactly, and held beyond the lowest point.
+        for mu in [0.05, 0.33, 0.5, 0.99, 1.0] {
+            assert!((interpolate(&curve, mu)[0] - mu).abs() < 1e-12);
+        }
+        assert_eq!(interpolate(&curve, 0.001)[0], LOWEST);
+    }
+}
