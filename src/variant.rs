@@ -3,8 +3,9 @@
 //! It prints and parses as
 //! `model=tm2,max_layers=5,fp16=off,tir=none,fgd=karis,g2=height-correlated,ndf=ggx,mode=generic`
 //! so the CLI, sweep files and result rows share one spelling. Parsing accepts any subset of
-//! the axes (the rest take their defaults) in any order; printing always gives all axes in the
-//! order above.
+//! the axes (the rest take their defaults) in any order; printing always gives the axes above
+//! in that order, then `transport` and `interfaces` where they are off their defaults (added
+//! after the published study: keys written before them print as they did).
 //!
 //! | axis | values | mechanism |
 //! |---|---|---|
@@ -16,6 +17,8 @@
 //! | g2 | `height-correlated`, `smith`, `schlick`, `earl` | spec constant 4 |
 //! | ndf | `ggx`, `karis` | spec constant 5 |
 //! | mode | `generic`, `specialized`, `specialized-values`, `baked` | spec constant 7 (+ the material's structure, ids 8…17, and values, ids 32…) |
+//! | transport | `paper`, `corrected` | spec constant 21 (+ the material's energy ratios in its buffer) |
+//! | interfaces | `single`, `multiple` | which ratios the host computes for `corrected` |
 //!
 //! `mode` picks how much of the material the pipeline knows: nothing (`generic`, the talk's
 //! shader: parameters read at run time, arrays sized by `max_layers`), its structure
@@ -195,6 +198,19 @@ axis!(
     }
 );
 
+axis!(
+    /// How the layered models carry energy between their layers (issue 27).
+    Transport, "transport", {
+        /// The paper's: each interface one directional reflectance and 1 − r, every upward
+        /// crossing trapped with the first crossing's TIR ratio. The talk's reproduction.
+        Paper = "paper",
+        /// Each layer's energy from the discrete-ordinates transport of the material in the
+        /// variant's `interfaces` mode (`model::transport`), per material over the view cosine;
+        /// the lobes' shapes the paper's.
+        Corrected = "corrected",
+    }
+);
+
 impl Mode {
     /// Whether a pipeline of this mode is built for one material.
     pub fn per_material(self) -> bool {
@@ -213,6 +229,10 @@ pub struct VariantKey {
     pub g2: G2,
     pub ndf: Ndf,
     pub mode: Mode,
+    pub transport: Transport,
+    /// The interface mode `transport=corrected` takes its energies in (and the reference's
+    /// truth it is meant to meet); `paper` has one.
+    pub interfaces: Interfaces,
 }
 
 impl Default for VariantKey {
@@ -226,6 +246,8 @@ impl Default for VariantKey {
             g2: G2::HeightCorrelated,
             ndf: Ndf::Ggx,
             mode: Mode::Generic,
+            transport: Transport::Paper,
+            interfaces: Interfaces::Single,
         }
     }
 }
@@ -239,6 +261,8 @@ pub const AXES: &[&str] = &[
     "g2",
     "ndf",
     "mode",
+    "transport",
+    "interfaces",
 ];
 
 /// Layers whose numeric values a `specialized-values` pipeline holds as constants, and the
@@ -315,6 +339,8 @@ pub struct ShadeSpec {
     /// 1: the scene has analytic lights (`render::lights`): the forward pass loops over them.
     /// 0 removes the loops, which lavapipe would otherwise compile into every pass.
     pub lights: u32,
+    /// The `transport` axis (id 21).
+    pub transport: u32,
     /// `specialized-values`: the layers' values (see [`LAYER_VALUES`]).
     pub values: [[f32; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
 }
@@ -325,7 +351,7 @@ impl Default for ShadeSpec {
     }
 }
 
-const AXIS_ENTRIES: usize = 21;
+const AXIS_ENTRIES: usize = 22;
 const VALUE_ENTRIES: usize = (MAX_LAYERS_LIMIT * VALUES_PER_LAYER) as usize;
 
 const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENTRIES] {
@@ -334,7 +360,7 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
         offset: 0,
         size: 4,
     }; AXIS_ENTRIES + VALUE_ENTRIES];
-    // ids 0…20 are the u32 fields in declaration order, 4 bytes apart from offset 0.
+    // ids 0…21 are the u32 fields in declaration order, 4 bytes apart from offset 0.
     let mut i = 0;
     while i < AXIS_ENTRIES {
         out[i].id = i as u32;
@@ -350,7 +376,7 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
     out
 }
 
-const _: () = assert!(std::mem::offset_of!(ShadeSpec, lights) == 4 * (AXIS_ENTRIES - 1));
+const _: () = assert!(std::mem::offset_of!(ShadeSpec, transport) == 4 * (AXIS_ENTRIES - 1));
 
 impl crate::vk::SpecConstants for ShadeSpec {
     const ENTRIES: &'static [crate::vk::SpecEntry] = &shade_spec_entries();
@@ -380,6 +406,7 @@ impl VariantKey {
             surface_maps: 0,
             diffuse_base: 0,
             lights: 0,
+            transport: self.transport.code(),
             values: [[0.0; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
         }
     }
@@ -407,7 +434,16 @@ impl fmt::Display for VariantKey {
             self.g2,
             self.ndf,
             self.mode
-        )
+        )?;
+        // The axes added after the published study's print only off their defaults, so a key
+        // written before they existed prints as it did.
+        if self.transport != Transport::Paper {
+            write!(f, ",transport={}", self.transport)?;
+        }
+        if self.interfaces != Interfaces::Single {
+            write!(f, ",interfaces={}", self.interfaces)?;
+        }
+        Ok(())
     }
 }
 
@@ -500,6 +536,8 @@ impl VariantKey {
                 "g2" => key.g2 = G2::parse_value(value)?,
                 "ndf" => key.ndf = Ndf::parse_value(value)?,
                 "mode" => key.mode = Mode::parse_value(value)?,
+                "transport" => key.transport = Transport::parse_value(value)?,
+                "interfaces" => key.interfaces = Interfaces::parse_value(value)?,
                 _ => {
                     return Err(VariantError::UnknownAxis {
                         key: axis.into(),
@@ -528,6 +566,27 @@ mod tests {
     }
 
     #[test]
+    fn the_axes_added_after_the_published_study_print_only_off_their_defaults() {
+        let key: VariantKey = "model=tm2,transport=corrected,interfaces=multiple"
+            .parse()
+            .unwrap();
+        assert!(
+            key.to_string()
+                .ends_with(",mode=generic,transport=corrected,interfaces=multiple"),
+            "{key}"
+        );
+        let paper: VariantKey = "model=tm2,transport=paper".parse().unwrap();
+        assert!(paper.to_string().ends_with(",mode=generic"), "{paper}");
+        for (text, allowed) in [
+            ("transport=fixed", "paper, corrected"),
+            ("interfaces=double", "single, multiple"),
+        ] {
+            let e = text.parse::<VariantKey>().unwrap_err().to_string();
+            assert!(e.contains(allowed), "{e}");
+        }
+    }
+
+    #[test]
     fn every_value_of_every_axis_round_trips() {
         let mut keys = Vec::new();
         for &(_, model) in Model::VALUES {
@@ -538,16 +597,25 @@ mod tests {
                             for fp16 in [false, true] {
                                 for max_layers in [1, 7, 16] {
                                     for &(_, mode) in Mode::VALUES {
-                                        keys.push(VariantKey {
-                                            model,
-                                            max_layers,
-                                            fp16,
-                                            tir,
-                                            fgd,
-                                            g2,
-                                            ndf,
-                                            mode,
-                                        });
+                                        for (transport, interfaces) in [
+                                            (Transport::Paper, Interfaces::Single),
+                                            (Transport::Corrected, Interfaces::Single),
+                                            (Transport::Corrected, Interfaces::Multiple),
+                                            (Transport::Paper, Interfaces::Multiple),
+                                        ] {
+                                            keys.push(VariantKey {
+                                                model,
+                                                max_layers,
+                                                fp16,
+                                                tir,
+                                                fgd,
+                                                g2,
+                                                ndf,
+                                                mode,
+                                                transport,
+                                                interfaces,
+                                            });
+                                        }
                                     }
                                 }
                             }

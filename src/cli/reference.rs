@@ -73,22 +73,8 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
     let stack = Stack::resolve(&args.material)?;
     stack.require_uniform("`lamina reference`")?;
     let cosines = args.cos.checked()?;
-    let g2 = G2::parse_value(&args.g2).context("--g2")?;
-    let interfaces = Interfaces::parse_value(&args.interfaces).context("--interfaces")?;
-    if interfaces == Interfaces::Multiple && g2 != G2::HeightCorrelated {
-        anyhow::bail!(
-            "--g2 {g2} with --interfaces multiple: the microsurface walk's masking is Smith's \
-             height-correlated form; --g2 chooses the masking of --interfaces single"
-        );
-    }
-    let settings = Settings {
-        paths: args.paths,
-        seed: args.seed,
-        g2,
-        interfaces,
-        media: stack.model == Model::Tm6,
-    };
-    settings.check()?;
+    let settings = settings(args, stack.model)?;
+    let (g2, interfaces) = (settings.g2, settings.interfaces);
     let layers = stack.params();
     let walker = Walker::new(&layers, settings.media, g2, interfaces);
     let boundaries: Vec<String> = (0..=layers.len()).map(|b| walker.describe(b)).collect();
@@ -150,6 +136,27 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The walk's settings from the arguments, checked.
+fn settings(args: &ReferenceArgs, model: Model) -> Result<Settings> {
+    let g2 = G2::parse_value(&args.g2).context("--g2")?;
+    let interfaces = Interfaces::parse_value(&args.interfaces).context("--interfaces")?;
+    if interfaces == Interfaces::Multiple && g2 != G2::HeightCorrelated {
+        anyhow::bail!(
+            "--g2 {g2} with --interfaces multiple: the microsurface walk's masking is Smith's \
+             height-correlated form; --g2 chooses the masking of --interfaces single"
+        );
+    }
+    let settings = Settings {
+        paths: args.paths,
+        seed: args.seed,
+        g2,
+        interfaces,
+        media: model == Model::Tm6,
+    };
+    settings.check()?;
+    Ok(settings)
 }
 
 /// R and T per view cosine with their standard errors.

@@ -69,9 +69,7 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
     let mut cos_i = cos_theta;
     let mut transmittance = [0.0; 3];
     let mut lobes = Vec::with_capacity(stack.len());
-    let mut lobe_layers = Vec::with_capacity(stack.len());
     for (i, layer) in stack.iter().enumerate() {
-        lobe_layers.push(i);
         if let Some(rho) = layer.diffuse {
             // A Lambertian base under the layers above (`diffuse`): one diffuse lobe.
             let weight = diffuse::lobe_weight(e.t, rho, &diffuse::slab(&stack[..i], false));
@@ -160,8 +158,9 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
     Evaluation {
         reflectance: r_prev,
         transmittance,
+        // One lobe per layer, in order.
+        lobe_layers: (0..lobes.len()).collect(),
         lobes,
-        lobe_layers,
         retro_mask: 0,
     }
 }

@@ -4,11 +4,12 @@
 
 use crate::error::{Error, Result};
 use crate::gpu::{ComputeKernel, Gpu};
+use crate::model::transport::Correction;
 use crate::model::{Evaluation, LayerParams, Lobe};
 use crate::shader::interface::material_buffer;
 use crate::shader::kernel::{KernelInterface, LOCAL_SIZE_1D};
 use crate::tables::fgd::FgdLookup;
-use crate::variant::{Mode, Model, ShadeSpec, VariantKey};
+use crate::variant::{Mode, Model, ShadeSpec, Transport, VariantKey};
 use crate::vk::{
     submit_and_wait, Access, BindingKind, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
     Resource,
@@ -107,6 +108,7 @@ pub struct GpuEvaluation {
 
 impl<'g> GpuEvaluator<'g> {
     pub fn new(gpu: &'g Gpu, variant: VariantKey) -> Result<Self> {
+        crate::model::oracle::check_transport(variant)?;
         if variant.model == Model::Ggx {
             return Err(Error::Unsupported(
                 "eval evaluates the transfer-matrix models; use model=tm2 or model=tm6".into(),
@@ -216,6 +218,20 @@ impl<'g> GpuEvaluator<'g> {
         self.run(layers, &samples, Some(angular_radius))
     }
 
+    /// `transport=corrected`: the energy ratios of `layers`, from the tables' CPU twins.
+    fn correction(&self, layers: &[LayerParams]) -> Option<Correction> {
+        (self.variant.transport == Transport::Corrected).then(|| {
+            let tir = self.tir_lookup();
+            Correction::new(
+                layers,
+                self.variant.model,
+                self.variant.interfaces,
+                &self.fgd_lookup(),
+                tir.as_ref(),
+            )
+        })
+    }
+
     fn run(
         &self,
         layers: &[LayerParams],
@@ -250,7 +266,8 @@ impl<'g> GpuEvaluator<'g> {
         }
         let device = &self.gpu.device;
         let stride = 2 + self.max_lobes(layers.len());
-        let material = material_buffer(device, layers, None, "eval material")?;
+        let correction = self.correction(layers);
+        let material = material_buffer(device, layers, None, correction.as_ref(), "eval material")?;
         let shading = self
             .inputs
             .bind(self.variant, &material, None, None, "eval shading")?;

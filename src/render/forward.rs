@@ -36,6 +36,7 @@ impl ForwardPass {
         baked: Option<(BakedTable, BakedTexture)>,
     ) -> Result<Self> {
         let variant = key.variant;
+        crate::model::oracle::check_transport(variant)?;
         if variant.fp16 && !gpu.device.supports_fp16() {
             return Err(Error::Unsupported(format!(
                 "fp16=on needs the shaderFloat16 feature, which `{}` lacks",

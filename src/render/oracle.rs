@@ -6,7 +6,7 @@
 
 use crate::error::Result;
 use crate::gpu::Gpu;
-use crate::model::oracle::{check_cpu_variant, evaluate_model};
+use crate::model::oracle::{check_cpu_variant, evaluate_variant};
 use crate::model::{Evaluation, LayerParams};
 use crate::variant::VariantKey;
 
@@ -32,9 +32,12 @@ impl<'g> VariantOracle<'g> {
     pub fn evaluate(&self, layers: &[LayerParams], cosines: &[f64]) -> Result<Vec<Evaluation>> {
         let fgd = self.inputs.fgd_lookup(self.variant)?;
         let tir = self.inputs.tir_lookup(self.variant);
-        Ok(cosines
-            .iter()
-            .map(|&mu| evaluate_model(self.variant.model, layers, mu, &fgd, tir.as_ref()))
-            .collect())
+        Ok(evaluate_variant(
+            self.variant,
+            layers,
+            cosines,
+            &fgd,
+            tir.as_ref(),
+        ))
     }
 }

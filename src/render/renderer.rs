@@ -6,18 +6,20 @@
 
 use half::f16;
 
+use std::cell::RefCell;
 use std::sync::Arc;
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
 use crate::material::Surface;
+use crate::model::transport::Correction;
 use crate::model::LayerParams;
 use crate::shader::interface::{
     material_buffer, FrameConstants, SCENE_BINDINGS, SCENE_SET, SHADING_SET,
 };
 use crate::tables::environment::{EnvDesc, Environment};
-use crate::variant::{Mode, Model, VariantKey};
+use crate::variant::{Mode, Model, Transport, VariantKey};
 use crate::vk::{
     submit_and_wait, texel_bytes, Access, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
     DescriptorSetLayout, Format, GpuProfiler, Image, ImageDesc, ImageState, ImageView,
@@ -93,7 +95,13 @@ pub struct Renderer<'g> {
     /// the one frames are rendered with (`None`: uniform stacks).
     surfaces: Vec<SurfaceTexture>,
     current_surface: Option<usize>,
+    /// The energy ratios of the stacks rendered under `transport=corrected` so far, by
+    /// variant and stack (the last few: building them walks the stack's transport).
+    corrections: RefCell<Vec<(VariantKey, Vec<LayerParams>, Correction)>>,
 }
+
+/// Stacks whose `transport=corrected` ratios a renderer keeps.
+const KEPT_CORRECTIONS: usize = 8;
 
 impl<'g> Renderer<'g> {
     /// A renderer into a half-float target.
@@ -156,6 +164,7 @@ impl<'g> Renderer<'g> {
             frame_index: 0,
             surfaces: Vec::new(),
             current_surface: None,
+            corrections: RefCell::new(Vec::new()),
         })
     }
 
@@ -452,6 +461,36 @@ impl<'g> Renderer<'g> {
         Ok(())
     }
 
+    /// The energy ratios of `layers` under `variant` when its transport is `corrected`, from
+    /// the very tables it samples (their CPU twins): built once per variant and stack.
+    fn correction(
+        &self,
+        variant: VariantKey,
+        layers: &[LayerParams],
+    ) -> Result<Option<Correction>> {
+        if variant.transport != Transport::Corrected {
+            return Ok(None);
+        }
+        let mut kept = self.corrections.borrow_mut();
+        if let Some((_, _, c)) = kept.iter().find(|(v, l, _)| *v == variant && l == layers) {
+            return Ok(Some(c.clone()));
+        }
+        let fgd = self.inputs.fgd_lookup(variant)?;
+        let tir = self.inputs.tir_lookup(variant);
+        let c = Correction::new(
+            layers,
+            variant.model,
+            variant.interfaces,
+            &fgd,
+            tir.as_ref(),
+        );
+        if kept.len() >= KEPT_CORRECTIONS {
+            kept.remove(0);
+        }
+        kept.push((variant, layers.to_vec(), c.clone()));
+        Ok(Some(c))
+    }
+
     /// The frame's descriptor sets: the shading set (`layers`, the tables of `pass`'s variant,
     /// its baked lobes, the surface's maps) and the scene set (frame constants for a
     /// `width`×`height` target, the environment, the lights).
@@ -489,7 +528,8 @@ impl<'g> Renderer<'g> {
             "lights",
         )?;
         let maps = self.surface_texture().map(|t| &t.surface.maps);
-        let material = material_buffer(device, layers, maps, "material")?;
+        let correction = self.correction(pass.key.variant, layers)?;
+        let material = material_buffer(device, layers, maps, correction.as_ref(), "material")?;
         let baked = pass.baked.as_ref().map(|(_, texture)| &texture.view);
         let shading = self.inputs.bind(
             pass.key.variant,

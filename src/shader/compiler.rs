@@ -18,6 +18,10 @@ pub const HOST_DEFINES: &[(&str, u32)] = &[
     ("LAMINA_MAX_LAYERS_LIMIT", crate::variant::MAX_LAYERS_LIMIT),
     ("LAMINA_TIR_SIZE", super::interface::TIR_TABLE_SIZE),
     ("LAMINA_FGD_SIZE", super::interface::FGD_GRID_SIZE),
+    (
+        "LAMINA_TRANSPORT_POINTS",
+        crate::model::transport::POINTS as u32,
+    ),
 ];
 
 #[derive(Debug, thiserror::Error)]
@@ -167,7 +171,7 @@ fn layer_values_glsl() -> String {
 }
 
 fn codes_glsl() -> String {
-    use crate::variant::{Axis, Fgd, Mode, Model, Ndf, Tir, G2};
+    use crate::variant::{Axis, Fgd, Mode, Model, Ndf, Tir, Transport, G2};
     fn axis<A: Axis>(out: &mut String) {
         for &(spelling, value) in A::VALUES {
             let name = format!("{}_{}", A::NAME, spelling)
@@ -188,6 +192,7 @@ fn codes_glsl() -> String {
     axis::<G2>(&mut out);
     axis::<Ndf>(&mut out);
     axis::<Mode>(&mut out);
+    axis::<Transport>(&mut out);
     for (name, value) in [
         ("TM6_LOBES_PER_LAYER", crate::model::TM6_LOBES_PER_LAYER),
         ("TM6_LOBES_LESS", crate::model::TM6_LOBES_LESS),
@@ -216,6 +221,7 @@ fn codes_glsl() -> String {
         ("TIR_FIT_MIN_SCALE", crate::model::tir::FIT_MIN_SCALE),
         ("TIR_FIT_X_MIN", crate::model::tir::fit_roughness(0.0)),
         ("TIR_FIT_X_MAX", crate::model::tir::fit_roughness(1.0)),
+        ("TRANSPORT_LOWEST", crate::model::transport::LOWEST),
     ] {
         out.push_str(&format!("#define {name} {value:e}\n"));
     }

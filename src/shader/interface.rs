@@ -7,6 +7,7 @@ use std::mem::{offset_of, size_of};
 use std::sync::Arc;
 
 use crate::material::surface::SurfaceMaps;
+use crate::model::transport::{self, Correction};
 use crate::model::LayerParams;
 use crate::vk::{
     upload_image, BindingKind, Buffer, BufferUsageFlags, DescriptorSet, DescriptorSetLayout,
@@ -60,11 +61,21 @@ pub struct MaterialGpu {
     /// Per layer, the maps of its varying fields ([`SurfaceMaps`]'s codes: x: η, κ, σs, σa;
     /// y: α, depth, g, coverage; z: diffuse albedo, a byte each); zeros for a uniform stack.
     pub maps: [[u32; 4]; MAX_LAYERS_LIMIT as usize],
+    /// `transport=corrected`: per layer, then for the transmittance, the energy ratios at
+    /// [`transport::POINTS`] view cosines (rgb; [`Correction`]); 1 (the paper's energies)
+    /// otherwise.
+    pub transport: [[f32; 4]; TRANSPORT_ROWS * transport::POINTS],
 }
+
+/// Rows of [`MaterialGpu::transport`]: one per layer and the transmittance's.
+pub const TRANSPORT_ROWS: usize = MAX_LAYERS_LIMIT as usize + 1;
 
 const _: () = assert!(size_of::<LayerGpu>() == 96);
 const _: () = assert!(offset_of!(LayerGpu, params) == 64);
-const _: () = assert!(size_of::<MaterialGpu>() == 16 + 112 * MAX_LAYERS_LIMIT as usize);
+const _: () = assert!(
+    size_of::<MaterialGpu>()
+        == 16 + 112 * MAX_LAYERS_LIMIT as usize + 16 * TRANSPORT_ROWS * transport::POINTS
+);
 const _: () = assert!(offset_of!(MaterialGpu, layers) == 16);
 const _: () = assert!(offset_of!(MaterialGpu, maps) == 16 + 96 * MAX_LAYERS_LIMIT as usize);
 
@@ -81,6 +92,7 @@ impl MaterialGpu {
             info: [layers.len() as u32, 0, 0, 0],
             layers: [LayerGpu::default(); MAX_LAYERS_LIMIT as usize],
             maps: [[0; 4]; MAX_LAYERS_LIMIT as usize],
+            transport: [[1.0; 4]; TRANSPORT_ROWS * transport::POINTS],
         };
         for (dst, src) in gpu.layers.iter_mut().zip(layers) {
             *dst = LayerGpu {
@@ -96,6 +108,23 @@ impl MaterialGpu {
             };
         }
         gpu
+    }
+
+    /// With the energy ratios of `transport=corrected`.
+    pub fn with_transport(mut self, correction: &Correction) -> Self {
+        let rows = correction
+            .layers
+            .iter()
+            .take(MAX_LAYERS_LIMIT as usize)
+            .enumerate()
+            .chain([(MAX_LAYERS_LIMIT as usize, &correction.transmittance)]);
+        for (row, curve) in rows {
+            for (k, rgb) in curve.iter().enumerate() {
+                self.transport[row * transport::POINTS + k] =
+                    [rgb[0] as f32, rgb[1] as f32, rgb[2] as f32, 0.0];
+            }
+        }
+        self
     }
 
     /// With the map codes of a spatially varying stack (one per layer, top first).
@@ -265,17 +294,21 @@ impl ShadingLayout {
     }
 }
 
-/// A layer stack, with its maps' codes if it varies, in the storage buffer the shading set
-/// binds.
+/// A layer stack, with its maps' codes if it varies and its energy ratios under
+/// `transport=corrected`, in the storage buffer the shading set binds.
 pub fn material_buffer(
     device: &Arc<Device>,
     layers: &[LayerParams],
     maps: Option<&SurfaceMaps>,
+    correction: Option<&Correction>,
     name: &str,
 ) -> VkResult<Buffer> {
     let mut material = MaterialGpu::new(layers);
     if let Some(maps) = maps {
         material = material.with_maps(maps);
+    }
+    if let Some(correction) = correction {
+        material = material.with_transport(correction);
     }
     Buffer::with_data(device, BufferUsageFlags::STORAGE_BUFFER, &[material], name)
 }

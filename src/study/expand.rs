@@ -648,23 +648,7 @@ fn check_reference(
             ),
         ));
     }
-    let interfaces = match &spec.interfaces {
-        None => vec![Interfaces::Single],
-        Some(names) if names.is_empty() => {
-            return Err(bad(
-                file,
-                "reference.interfaces",
-                &format!("empty: give one or more of {}", Interfaces::allowed()),
-            ))
-        }
-        Some(names) => names
-            .iter()
-            .map(|n| {
-                Interfaces::parse_value(n)
-                    .map_err(|e| bad(file, "reference.interfaces", &e.to_string()))
-            })
-            .collect::<Result<Vec<_>>>()?,
-    };
+    let interfaces = reference_interfaces(file, spec.interfaces.as_deref())?;
     Ok(ReferenceStudy {
         cases: points.drain(..).map(|p| p.case).collect(),
         cosines: spec.cosines.clone(),
@@ -672,6 +656,25 @@ fn check_reference(
         seed: spec.seed.unwrap_or(1),
         interfaces,
     })
+}
+
+/// `reference.interfaces`: the truths, `single` when not given.
+fn reference_interfaces(file: &Path, names: Option<&[String]>) -> Result<Vec<Interfaces>> {
+    match names {
+        None => Ok(vec![Interfaces::Single]),
+        Some([]) => Err(bad(
+            file,
+            "reference.interfaces",
+            &format!("empty: give one or more of {}", Interfaces::allowed()),
+        )),
+        Some(names) => names
+            .iter()
+            .map(|n| {
+                Interfaces::parse_value(n)
+                    .map_err(|e| bad(file, "reference.interfaces", &e.to_string()))
+            })
+            .collect(),
+    }
 }
 
 /// `target[i]`: finite positive bound, key fragments that parse, a material that resolves, and

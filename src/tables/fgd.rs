@@ -591,7 +591,7 @@ impl<'g> FgdProbe<'g> {
             gpu,
             layout,
             kernel,
-            material: material_buffer(&gpu.device, &[], None, "fgd probe material")?,
+            material: material_buffer(&gpu.device, &[], None, None, "fgd probe material")?,
             tir_unused: TirTable::for_variant(gpu, crate::variant::Tir::None)?,
         })
     }

@@ -20,7 +20,8 @@ use std::mem::{offset_of, size_of};
 
 use lamina::render::eval;
 use lamina::shader::interface::{
-    FrameConstants, LayerGpu, MaterialGpu, SCENE_BINDINGS, SCENE_SET, SHADING_BINDINGS, SHADING_SET,
+    FrameConstants, LayerGpu, MaterialGpu, SCENE_BINDINGS, SCENE_SET, SHADING_BINDINGS,
+    SHADING_SET, TRANSPORT_ROWS,
 };
 use lamina::shader::kernel::{self, KernelInterface, KernelSpec};
 use lamina::shader::{entry_points, ShaderCompiler};
@@ -511,7 +512,8 @@ fn material_and_frame_blocks_have_the_host_layout() {
             [
                 at(offset_of!(MaterialGpu, info)),
                 at(offset_of!(MaterialGpu, layers)),
-                at(offset_of!(MaterialGpu, maps))
+                at(offset_of!(MaterialGpu, maps)),
+                at(offset_of!(MaterialGpu, transport))
             ]
         );
         let (layer, stride, length) = array(&spirv, spirv.members(material)[1].ty);
@@ -529,8 +531,19 @@ fn material_and_frame_blocks_have_the_host_layout() {
         );
         assert_eq!(
             offset_of!(MaterialGpu, maps) + maps as usize * 16,
-            size_of::<MaterialGpu>(),
+            offset_of!(MaterialGpu, transport),
             "map codes"
+        );
+        let (_, stride, ratios) = array(&spirv, spirv.members(material)[3].ty);
+        assert_eq!(
+            (stride, ratios as usize),
+            (16, TRANSPORT_ROWS * lamina::model::transport::POINTS),
+            "one vec4 of energy ratios per row and view cosine"
+        );
+        assert_eq!(
+            offset_of!(MaterialGpu, transport) + ratios as usize * 16,
+            size_of::<MaterialGpu>(),
+            "energy ratios"
         );
         assert_eq!(
             offsets(&spirv, layer),

@@ -120,6 +120,10 @@ struct Tm2State {
     real3 r_prev;
     real g_prev;
     float g_t0i;
+    // The view cosine, and the sum of the lobes emitted (the paper's r_prev, or under
+    // transport=corrected the transported energies).
+    float mu;
+    vec3 emitted;
 };
 
 // Adds component c (layer i; `g_next`: the g of the next layer's reflection) below the stack
@@ -134,7 +138,9 @@ void tm2_add(uint i, Tm2Factors c, float g_next, inout Tm2State s, inout vec3 tr
         // A Lambertian base under the layers above: one diffuse lobe, nothing transmitted.
         vec3 rho = tm_layer(i).diffuse.rgb;
         vec3 weight = tm_diffuse_weight(vec3(s.e.t), rho, tm_diffuse_slab(i, false));
-        tm_emit_lobe(weight, 1.0, LOBE_DIFFUSE);
+        vec3 emitted = tm_transported(i, s.mu, weight);
+        tm_emit_lobe(emitted, 1.0, LOBE_DIFFUSE);
+        s.emitted += emitted;
         s.r_prev += real3(weight);
         transmittance = vec3(0.0);
         return;
@@ -172,7 +178,9 @@ void tm2_add(uint i, Tm2Factors c, float g_next, inout Tm2State s, inout vec3 tr
     real3 weight = r_total - s.r_prev;
     real energy = tm_avg(weight);
     float lobe_g = energy > real(0.0) ? min(float((g_total - s.g_prev) / energy), 1.0) : 0.0;
-    tm_emit_lobe(vec3(weight), hg_alpha_of_g(lobe_g), LOBE_MIRROR);
+    vec3 emitted = tm_transported(i, s.mu, vec3(weight));
+    tm_emit_lobe(emitted, hg_alpha_of_g(lobe_g), LOBE_MIRROR);
+    s.emitted += emitted;
     s.r_prev = r_total;
     s.g_prev = g_total;
     s.g_t0i = g_t0j;
@@ -186,7 +194,8 @@ uint tm2_evaluate(float mu, out vec3 reflectance, out vec3 transmittance) {
     uint count;
     tm2_factors(mu, comps, count);
 
-    Tm2State s = Tm2State(tm_slab_empty(), tm_slab1_empty(), real3(0.0), real(0.0), 1.0);
+    Tm2State s = Tm2State(tm_slab_empty(), tm_slab1_empty(), real3(0.0), real(0.0), 1.0, mu,
+                          vec3(0.0));
     transmittance = vec3(1.0);
     if (SPECIALIZED) {
         [[unroll]] for (uint i = 0u; i < LAYER_COUNT; ++i) {
@@ -199,7 +208,8 @@ uint tm2_evaluate(float mu, out vec3 reflectance, out vec3 transmittance) {
             tm2_add(i, comps[i], g_next, s, transmittance);
         }
     }
-    reflectance = vec3(s.r_prev);
+    reflectance = TRANSPORT == TRANSPORT_CORRECTED ? s.emitted : vec3(s.r_prev);
+    transmittance = tm_transported_transmittance(mu, transmittance);
     return count;
 }
 

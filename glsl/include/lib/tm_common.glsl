@@ -254,6 +254,41 @@ LayerGpu tm_layer(uint i) {
     return material.layers[i];
 }
 
+// transport=corrected: the energy ratio of row `row` (a layer of the material, or
+// LAMINA_MAX_LAYERS_LIMIT for the transmittance) at view cosine `mu`, linear between the
+// tabulated cosines and held beyond the ends (src/model/transport.rs's `interpolate`).
+vec3 tm_transport_ratio(uint row, float mu) {
+    const uint P = LAMINA_TRANSPORT_POINTS;
+    float x = clamp(mu, 0.0, 1.0) * float(P - 1u);
+    uint k = min(uint(x), P - 2u);
+    float lo = max(float(k) / float(P - 1u), TRANSPORT_LOWEST);
+    float hi = float(k + 1u) / float(P - 1u);
+    float f = clamp((mu - lo) / (hi - lo), 0.0, 1.0);
+    return mix(material.transport[row * P + k].rgb, material.transport[row * P + k + 1u].rgb, f);
+}
+
+// The weight a lobe of layer `i` (of the stack being evaluated) emits at view cosine `mu`:
+// the model's, scaled under transport=corrected by its material layer's ratio (a pixel whose
+// coverage drops layers evaluates its covered ones: `i` is then a slot of the material's).
+vec3 tm_transported(uint i, float mu, vec3 weight) {
+    if (TRANSPORT != TRANSPORT_CORRECTED) {
+        return weight;
+    }
+    uint row = i;
+#ifdef TM_SURFACE_MAPS
+    if (SURFACE_MAPS != 0u) {
+        row = tm_surface_slots[i];
+    }
+#endif
+    return weight * tm_transport_ratio(row, mu);
+}
+
+// The stack's transmittance at view cosine `mu` under the variant's transport.
+vec3 tm_transported_transmittance(float mu, vec3 t) {
+    return TRANSPORT == TRANSPORT_CORRECTED
+        ? t * tm_transport_ratio(LAMINA_MAX_LAYERS_LIMIT, mu) : t;
+}
+
 bool tm_bit(uint mask, uint i) {
     return ((mask >> i) & 1u) != 0u;
 }

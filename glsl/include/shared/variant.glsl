@@ -1,5 +1,5 @@
 // Specialization constants of the shading passes. Mirrors `ShadeSpec` in
-// src/variant.rs (ids 0…17 and order, the values from id 32 in generated/layer_values.glsl);
+// src/variant.rs (ids 0…21 and order, the values from id 32 in generated/layer_values.glsl);
 // the codes follow the value tables there.
 #ifndef LAMINA_SHARED_VARIANT
 #define LAMINA_SHARED_VARIANT
@@ -39,6 +39,9 @@ layout(constant_id = 18) const uint SURFACE_MAPS = 0;
 layout(constant_id = 19) const uint DIFFUSE_BASE = 0;
 // 1: the scene has analytic lights (render::lights); 0 folds the light loops away.
 layout(constant_id = 20) const uint LIGHTS = 0;
+// TRANSPORT_PAPER or TRANSPORT_CORRECTED: under `corrected` each layer's lobes are scaled by
+// the material's energy ratios (material.transport, src/model/transport.rs).
+layout(constant_id = 21) const uint TRANSPORT = 0;
 
 // The codes of every axis value (MODEL_TM2, TIR_LUT32, FGD_RESAMPLED4D, G2_EARL, …), written
 // from the Rust value tables by src/shader/compiler.rs.
