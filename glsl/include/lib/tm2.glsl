@@ -120,9 +120,10 @@ struct Tm2State {
     real3 r_prev;
     real g_prev;
     float g_t0i;
-    // The view cosine, and the sum of the lobes emitted (the paper's r_prev, or under
-    // transport=corrected the transported energies).
-    float mu;
+    // Where the view cosine falls among the energy ratios' (transport=corrected), and the sum
+    // of the lobes emitted (the paper's r_prev, or under transport=corrected the transported
+    // energies).
+    TmTransportAt at;
     vec3 emitted;
 };
 
@@ -138,7 +139,7 @@ void tm2_add(uint i, Tm2Factors c, float g_next, inout Tm2State s, inout vec3 tr
         // A Lambertian base under the layers above: one diffuse lobe, nothing transmitted.
         vec3 rho = tm_layer(i).diffuse.rgb;
         vec3 weight = tm_diffuse_weight(vec3(s.e.t), rho, tm_diffuse_slab(i, false));
-        vec3 emitted = tm_transported(i, s.mu, weight);
+        vec3 emitted = tm_transported(i, s.at, weight);
         tm_emit_lobe(emitted, 1.0, LOBE_DIFFUSE);
         s.emitted += emitted;
         s.r_prev += real3(weight);
@@ -178,7 +179,7 @@ void tm2_add(uint i, Tm2Factors c, float g_next, inout Tm2State s, inout vec3 tr
     real3 weight = r_total - s.r_prev;
     real energy = tm_avg(weight);
     float lobe_g = energy > real(0.0) ? min(float((g_total - s.g_prev) / energy), 1.0) : 0.0;
-    vec3 emitted = tm_transported(i, s.mu, vec3(weight));
+    vec3 emitted = tm_transported(i, s.at, vec3(weight));
     tm_emit_lobe(emitted, hg_alpha_of_g(lobe_g), LOBE_MIRROR);
     s.emitted += emitted;
     s.r_prev = r_total;
@@ -194,8 +195,8 @@ uint tm2_evaluate(float mu, out vec3 reflectance, out vec3 transmittance) {
     uint count;
     tm2_factors(mu, comps, count);
 
-    Tm2State s = Tm2State(tm_slab_empty(), tm_slab1_empty(), real3(0.0), real(0.0), 1.0, mu,
-                          vec3(0.0));
+    Tm2State s = Tm2State(tm_slab_empty(), tm_slab1_empty(), real3(0.0), real(0.0), 1.0,
+                          tm_transport_at(mu), vec3(0.0));
     transmittance = vec3(1.0);
     if (SPECIALIZED) {
         [[unroll]] for (uint i = 0u; i < LAYER_COUNT; ++i) {
@@ -209,7 +210,7 @@ uint tm2_evaluate(float mu, out vec3 reflectance, out vec3 transmittance) {
         }
     }
     reflectance = TRANSPORT == TRANSPORT_CORRECTED ? s.emitted : vec3(s.r_prev);
-    transmittance = tm_transported_transmittance(mu, transmittance);
+    transmittance = tm_transported_transmittance(s.at, transmittance);
     return count;
 }
 

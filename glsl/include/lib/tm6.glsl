@@ -267,9 +267,9 @@ struct Tm6Walk {
     vec3 m_t_ff;
     float m_g_rfb;
     float m_g_tff;
-    // The view cosine, and the sum of the lobes emitted (under transport=corrected, the
-    // transported energies).
-    float mu;
+    // Where the view cosine falls among the energy ratios' (transport=corrected), and the sum
+    // of the lobes emitted (under transport=corrected, the transported energies).
+    TmTransportAt at;
     vec3 emitted;
 };
 
@@ -288,7 +288,7 @@ bool tm6_step(uint step, uint layers, inout Tm6Walk w, inout vec3 transmittance)
         // diffuse lobe, which ends the walk.
         vec3 t_view = vec3(w.e.down[0] + w.e.down[1] + w.e.down[2]);
         vec3 weight = tm_diffuse_weight(t_view, layer.diffuse.rgb, tm_diffuse_slab(i, true));
-        vec3 emitted = tm_transported(i, w.mu, weight);
+        vec3 emitted = tm_transported(i, w.at, weight);
         tm_emit_lobe(emitted, 1.0, LOBE_DIFFUSE);
         w.emitted += emitted;
         w.lobe_count++;
@@ -405,7 +405,7 @@ bool tm6_step(uint step, uint layers, inout Tm6Walk w, inout vec3 transmittance)
             vec3 dr = now - w.prev[k];
             float lobe_g = min((hg_safe_ratio(dg.r, dr.r) + hg_safe_ratio(dg.g, dr.g)
                                 + hg_safe_ratio(dg.b, dr.b)) / 3.0, 1.0);
-            vec3 emitted = tm_transported(i, w.mu, max(dr, vec3(0.0)));
+            vec3 emitted = tm_transported(i, w.at, max(dr, vec3(0.0)));
             tm_emit_lobe(emitted, hg_alpha_of_g(lobe_g), k == 2 ? LOBE_RETRO : LOBE_MIRROR);
             w.emitted += emitted;
             w.lobe_count++;
@@ -438,7 +438,7 @@ uint tm6_evaluate(float mu, out vec3 reflectance, out vec3 transmittance) {
     w.m_t_ff = vec3(1.0);
     w.m_g_rfb = 0.0;
     w.m_g_tff = 1.0;
-    w.mu = mu;
+    w.at = tm_transport_at(mu);
     w.emitted = vec3(0.0);
     transmittance = vec3(1.0);
     if (SPECIALIZED) {
@@ -454,7 +454,7 @@ uint tm6_evaluate(float mu, out vec3 reflectance, out vec3 transmittance) {
         }
     }
     reflectance = TRANSPORT == TRANSPORT_CORRECTED ? w.emitted : w.prev[0] + w.prev[1] + w.prev[2];
-    transmittance = tm_transported_transmittance(mu, transmittance);
+    transmittance = tm_transported_transmittance(w.at, transmittance);
     return w.lobe_count;
 }
 

@@ -254,23 +254,35 @@ LayerGpu tm_layer(uint i) {
     return material.layers[i];
 }
 
-// transport=corrected: the energy ratio of row `row` (a layer of the material, or
-// LAMINA_MAX_LAYERS_LIMIT for the transmittance) at view cosine `mu`, linear between the
-// tabulated cosines and held beyond the ends (src/model/transport.rs's `interpolate`).
-vec3 tm_transport_ratio(uint row, float mu) {
+// transport=corrected: where the view cosine `mu` falls among the tabulated cosines of the
+// material's energy ratios (μ_k = k/(P − 1), the first TRANSPORT_LOWEST): the lower point and
+// the weight of the upper one, held beyond the ends (src/model/transport.rs's `interpolate`).
+// Found once per evaluation; each lobe then reads two points.
+struct TmTransportAt {
+    uint k;
+    float f;
+};
+
+TmTransportAt tm_transport_at(float mu) {
     const uint P = LAMINA_TRANSPORT_POINTS;
     float x = clamp(mu, 0.0, 1.0) * float(P - 1u);
     uint k = min(uint(x), P - 2u);
-    float lo = max(float(k) / float(P - 1u), TRANSPORT_LOWEST);
-    float hi = float(k + 1u) / float(P - 1u);
-    float f = clamp((mu - lo) / (hi - lo), 0.0, 1.0);
-    return mix(material.transport[row * P + k].rgb, material.transport[row * P + k + 1u].rgb, f);
+    // Above the first interval the points are evenly spaced: the weight is x − k.
+    float first = (mu - TRANSPORT_LOWEST) / (1.0 / float(P - 1u) - TRANSPORT_LOWEST);
+    return TmTransportAt(k, clamp(k == 0u ? first : x - float(k), 0.0, 1.0));
 }
 
-// The weight a lobe of layer `i` (of the stack being evaluated) emits at view cosine `mu`:
-// the model's, scaled under transport=corrected by its material layer's ratio (a pixel whose
-// coverage drops layers evaluates its covered ones: `i` is then a slot of the material's).
-vec3 tm_transported(uint i, float mu, vec3 weight) {
+// The ratio of row `row` (a layer of the material, or LAMINA_MAX_LAYERS_LIMIT for the
+// transmittance) at `at`.
+vec3 tm_transport_ratio(uint row, TmTransportAt at) {
+    uint base = row * LAMINA_TRANSPORT_POINTS + at.k;
+    return mix(material.transport[base].rgb, material.transport[base + 1u].rgb, at.f);
+}
+
+// The weight a lobe of layer `i` (of the stack being evaluated) emits: the model's, scaled
+// under transport=corrected by its material layer's ratio (a pixel whose coverage drops layers
+// evaluates its covered ones: `i` is then a slot of the material's).
+vec3 tm_transported(uint i, TmTransportAt at, vec3 weight) {
     if (TRANSPORT != TRANSPORT_CORRECTED) {
         return weight;
     }
@@ -280,13 +292,16 @@ vec3 tm_transported(uint i, float mu, vec3 weight) {
         row = tm_surface_slots[i];
     }
 #endif
-    return weight * tm_transport_ratio(row, mu);
+    return weight * tm_transport_ratio(row, at);
 }
 
-// The stack's transmittance at view cosine `mu` under the variant's transport.
-vec3 tm_transported_transmittance(float mu, vec3 t) {
-    return TRANSPORT == TRANSPORT_CORRECTED
-        ? t * tm_transport_ratio(LAMINA_MAX_LAYERS_LIMIT, mu) : t;
+// The stack's transmittance under the variant's transport (nothing to scale over a
+// conductor, which a specialized pipeline knows).
+vec3 tm_transported_transmittance(TmTransportAt at, vec3 t) {
+    if (TRANSPORT != TRANSPORT_CORRECTED || (SPECIALIZED && CONDUCTOR_BASE != 0u)) {
+        return t;
+    }
+    return t * tm_transport_ratio(LAMINA_MAX_LAYERS_LIMIT, at);
 }
 
 bool tm_bit(uint mask, uint i) {
