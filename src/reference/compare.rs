@@ -55,6 +55,10 @@ pub struct MaterialReference {
     /// Layers in the stack (a coated stack has more than one).
     #[serde(default)]
     pub layers: usize,
+    /// A random stack of the study's (`[reference.random]`), its TOML beside it; `None` for a
+    /// named material.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub random_stack: Option<String>,
     pub paths: u64,
     pub rows: Vec<ReferenceRow>,
 }
@@ -284,6 +288,7 @@ pub fn compare(
         variant: variant.to_string(),
         interfaces: interfaces.to_string(),
         layers: layers.len(),
+        random_stack: None,
         paths,
         rows,
     }))

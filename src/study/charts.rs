@@ -7,7 +7,7 @@ use std::path::Path;
 
 use crate::chart::{Chart, Series, XyChart, XySeries};
 use crate::profile::results::{Results, Run};
-use crate::reference::compare::MaterialReference;
+use crate::reference::compare::{MaterialReference, ReferenceRow};
 
 use super::meta::{BakeErrorRow, StudyMeta};
 
@@ -224,6 +224,63 @@ pub fn reference_chart(e: &MaterialReference) -> XyChart {
         x_label: "θ_o (degrees; positive: mirror side)".into(),
         y_label: "BRDF (1/sr), mean of RGB".into(),
         x_range: (-90.0, 90.0),
+        series,
+    }
+}
+
+/// The reference study's random stacks: per truth and transport, the fraction of (stack, view)
+/// points whose |ΔR|/R (mean of the channels) is at most x — the error's distribution.
+pub fn reference_distribution_chart(compared: &[MaterialReference]) -> XyChart {
+    let mut series = Vec::new();
+    let mut truths: Vec<&str> = Vec::new();
+    for e in compared {
+        if !truths.contains(&e.interfaces.as_str()) {
+            truths.push(&e.interfaces);
+        }
+    }
+    for (t, truth) in truths.iter().enumerate() {
+        let rows = || {
+            compared
+                .iter()
+                .filter(|e| e.random_stack.is_some() && e.interfaces == *truth)
+                .flat_map(|e| &e.rows)
+        };
+        for (k, (transport, error)) in [
+            (
+                "paper",
+                &(|r: &ReferenceRow| r.relative_error()) as &dyn Fn(&ReferenceRow) -> f64,
+            ),
+            ("corrected", &|r: &ReferenceRow| {
+                r.relative_error_corrected()
+            }),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let mut errors: Vec<f64> = rows().map(|r| 100.0 * error(r).abs()).collect();
+            errors.sort_by(f64::total_cmp);
+            let n = errors.len().max(1) as f64;
+            series.push(XySeries {
+                label: format!("{transport}, interfaces={truth}"),
+                points: errors
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &x)| (x, (i + 1) as f64 / n, 0.0, 0.0))
+                    .collect(),
+                line: true,
+                colour: 2 * t + k,
+            });
+        }
+    }
+    let largest = series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.0))
+        .fold(5.0f64, f64::max);
+    XyChart {
+        title: "Random stacks: the model's error against the reference".into(),
+        x_label: "|ΔR| / R (%, mean of RGB)".into(),
+        y_label: "fraction of (stack, view) points".into(),
+        x_range: (0.0, largest.min(100.0)),
         series,
     }
 }

@@ -13,10 +13,10 @@ use crate::profile::plan::{Case, Plan};
 use crate::render::lights::{Lighting, PRESETS};
 use crate::render::scene::Scene;
 use crate::size::Size;
-use crate::variant::{Axis, Interfaces, Mode, Model, VariantKey, AXES};
+use crate::variant::{Mode, VariantKey, AXES};
 
-use super::file::{bad, read, BakeErrorSpec, ReferenceSpec, SweepFile, Target};
-use super::{Point, ReferenceStudy, Study};
+use super::file::{bad, read, BakeErrorSpec, SweepFile, Target};
+use super::{Point, Study};
 
 /// What a study shades when its file names no `scene`: every pixel, as the talk measured.
 pub const DEFAULT_SCENE: Scene = Scene::FullScreen;
@@ -131,7 +131,7 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
     let reference = sweep
         .reference
         .as_ref()
-        .map(|spec| check_reference(file, sweep, spec, &mut points))
+        .map(|spec| super::reference::check(file, sweep, spec, &mut points))
         .transpose()?;
     let counter = measuring.counter.filter(|_| reference.is_none());
     let image_error_spp = check_reference_spp(file, over.reference_spp.or(sweep.reference_spp))?
@@ -585,96 +585,6 @@ fn check_published(file: &Path, sweep: &SweepFile) -> Result<()> {
             .map_err(|e| bad(file, &format!("published[{i}].match"), &e.to_string()))?;
     }
     Ok(())
-}
-
-/// `[reference]`: alone in its study (no axes, figures, targets or bake error), view cosines
-/// in (0, 1], a path count in range. Takes the study's points: their materials and variants
-/// are the reference study's, and nothing is timed.
-fn check_reference(
-    file: &Path,
-    sweep: &SweepFile,
-    spec: &ReferenceSpec,
-    points: &mut Vec<Point>,
-) -> Result<ReferenceStudy> {
-    if !sweep.axes.is_empty()
-        || !sweep.published.is_empty()
-        || !sweep.targets.is_empty()
-        || sweep.bake_error.is_some()
-    {
-        return Err(bad(
-            file,
-            "reference",
-            "a reference study compares each material's own model with the stochastic \
-             reference; it takes `materials` and `base`, not `axis`, `published`, `target` \
-             or `bake_error`",
-        ));
-    }
-    if spec.cosines.is_empty() {
-        return Err(bad(
-            file,
-            "reference.cosines",
-            "empty: give view cosines in (0, 1]",
-        ));
-    }
-    if let Some(c) = spec
-        .cosines
-        .iter()
-        .find(|c| !(c.is_finite() && **c > 0.0 && **c <= 1.0))
-    {
-        return Err(bad(
-            file,
-            "reference.cosines",
-            &format!("{c}: allowed: view cosines in (0, 1]"),
-        ));
-    }
-    if spec.paths == 0 || spec.paths > crate::reference::MAX_PATHS {
-        return Err(bad(
-            file,
-            "reference.paths",
-            &format!(
-                "{}: allowed: 1 to {} paths per channel and view cosine",
-                spec.paths,
-                crate::reference::MAX_PATHS
-            ),
-        ));
-    }
-    if let Some(p) = points.iter().find(|p| p.case.variant.model == Model::Ggx) {
-        return Err(bad(
-            file,
-            "base",
-            &format!(
-                "{}: model=ggx is not a layered model; a reference study compares tm2 or tm6",
-                p.case.variant
-            ),
-        ));
-    }
-    let interfaces = reference_interfaces(file, spec.interfaces.as_deref())?;
-    Ok(ReferenceStudy {
-        cases: points.drain(..).map(|p| p.case).collect(),
-        cosines: spec.cosines.clone(),
-        paths: spec.paths,
-        seed: spec.seed.unwrap_or(1),
-        interfaces,
-    })
-}
-
-/// `reference.interfaces`: the truths, `single` when not given.
-fn reference_interfaces(file: &Path, names: Option<&[String]>) -> Result<Vec<Interfaces>> {
-    match names {
-        None => Ok(vec![Interfaces::Single]),
-        Some([]) => Err(bad(
-            file,
-            "reference.interfaces",
-            &format!("empty: give one or more of {}", Interfaces::allowed()),
-        )),
-        Some(names) => names
-            .iter()
-            .map(|n| {
-                Interfaces::parse_value(n)
-                    .map_err(|e| bad(file, "reference.interfaces", &e.to_string()))
-            })
-            .collect(),
-    }
 }
 
 /// `target[i]`: finite positive bound, key fragments that parse, a material that resolves, and

@@ -96,6 +96,18 @@ pub struct ReferenceSpec {
     pub seed: Option<u64>,
     /// The truths to compare with: the reference's interface modes (default `["single"]`).
     pub interfaces: Option<Vec<String>>,
+    /// Random stacks within the presets' ranges, compared beside the materials.
+    pub random: Option<RandomSpec>,
+}
+
+/// `[reference.random]`: how many random stacks (`material::random::preset_like_stack`), from
+/// which seed, with how many paths per channel and view cosine (the study's by default).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RandomSpec {
+    pub count: usize,
+    pub seed: u64,
+    pub paths: Option<u64>,
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]

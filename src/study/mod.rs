@@ -14,6 +14,7 @@ pub mod dirs;
 pub mod expand;
 pub mod file;
 pub mod meta;
+mod reference;
 pub mod report;
 pub mod run;
 pub mod write;
@@ -93,6 +94,9 @@ pub struct ReferenceStudy {
     pub seed: u64,
     /// The reference's interface modes, each a truth of its own.
     pub interfaces: Vec<crate::variant::Interfaces>,
+    /// Random stacks within the presets' ranges, each in its own model, and their paths.
+    pub random: Vec<Case>,
+    pub random_paths: u64,
 }
 
 /// Where a study's files go under `out`: `out` itself for a lone study, `out/NAME` for each

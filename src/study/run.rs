@@ -143,24 +143,33 @@ fn reference_comparisons(
     spec: &ReferenceStudy,
     progress: &mut impl FnMut(&str, usize, usize),
 ) -> Result<Vec<MaterialReference>> {
-    let per_material = spec.paths * spec.cosines.len() as u64;
-    let total = per_material * (spec.cases.len() * spec.interfaces.len()) as u64;
+    let cosines = spec.cosines.len() as u64;
+    let per_truth = cosines
+        * (spec.paths * spec.cases.len() as u64 + spec.random_paths * spec.random.len() as u64);
+    let total = per_truth * spec.interfaces.len() as u64;
     let never = AtomicBool::new(false);
-    let mut out = Vec::with_capacity(spec.cases.len() * spec.interfaces.len());
+    let mut out =
+        Vec::with_capacity((spec.cases.len() + spec.random.len()) * spec.interfaces.len());
+    let mut before = 0;
     for &interfaces in &spec.interfaces {
-        for case in &spec.cases {
-            let before = out.len() as u64 * per_material;
-            let compared = crate::reference::compare::compare(
+        let named = spec.cases.iter().map(|c| (c, spec.paths, false));
+        let random = spec.random.iter().map(|c| (c, spec.random_paths, true));
+        for (case, paths, is_random) in named.chain(random) {
+            let mut compared = crate::reference::compare::compare(
                 &case.stack.name,
                 &case.stack.params(),
                 case.variant,
                 interfaces,
                 &spec.cosines,
-                (spec.paths, spec.seed),
-                &mut |paths| progress("reference paths", (before + paths) as usize, total as usize),
+                (paths, spec.seed),
+                &mut |p| progress("reference paths", (before + p) as usize, total as usize),
                 &never,
             )?
             .expect("a reference study is never stopped");
+            if is_random {
+                compared.random_stack = Some(case.stack.to_toml());
+            }
+            before += paths * cosines;
             out.push(compared);
         }
     }

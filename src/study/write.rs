@@ -8,7 +8,9 @@ use crate::imageio::{write_file_atomically, write_png};
 use crate::profile::image_error::{error_map_path, ErrorMap};
 use crate::profile::results::Results;
 
-use super::charts::{charts_of, pareto_charts, reference_chart, reference_chart_stem};
+use super::charts::{
+    charts_of, pareto_charts, reference_chart, reference_chart_stem, reference_distribution_chart,
+};
 use super::meta::StudyMeta;
 use super::Study;
 
@@ -37,8 +39,23 @@ pub fn write(
         charts.push(path.with_extension("png"));
     }
     for e in &meta.reference {
+        if let Some(toml) = &e.random_stack {
+            // A random stack: its TOML (once), no slice chart of its own.
+            let path = dir
+                .join("random-stacks")
+                .join(format!("{}.toml", e.material));
+            if !path.exists() {
+                write_file_atomically(&path, toml)?;
+            }
+            continue;
+        }
         let path = dir.join(reference_chart_stem(&e.material, &e.interfaces));
         reference_chart(e).write(&path)?;
+        charts.push(path.with_extension("png"));
+    }
+    if meta.reference.iter().any(|e| e.random_stack.is_some()) {
+        let path = dir.join("reference-distribution");
+        reference_distribution_chart(&meta.reference).write(&path)?;
         charts.push(path.with_extension("png"));
     }
     for (run, map) in error_maps {

@@ -248,6 +248,14 @@ fn bad_sweep_files_are_refused_before_any_gpu_work() {
             "cosines = [0.5]\npaths = 10\ninterfaces = []\n",
             vec!["reference.interfaces", "empty"],
         ),
+        (
+            "cosines = [0.5]\npaths = 10\n[reference.random]\ncount = 0\nseed = 1\n",
+            vec!["reference.random.count", "1 to 1000"],
+        ),
+        (
+            "cosines = [0.5]\npaths = 10\n[reference.random]\ncount = 2\nseed = 1\npaths = 0\n",
+            vec!["reference.random.paths", "1 to"],
+        ),
     ] {
         let e = load_error("reference", &format!("{reference}{body}"));
         for w in words {
@@ -293,7 +301,8 @@ fn a_reference_study_compares_each_material_with_the_reference() {
     std::fs::write(
         dir.join("ref.toml"),
         "name = \"ref\"\nmaterials = [\"gold\", \"dusty-varnish\"]\ncounter = \"instructions\"\n\
-         [reference]\ncosines = [1.0, 0.4]\npaths = 2000\ninterfaces = [\"single\", \"multiple\"]\n",
+         [reference]\ncosines = [1.0, 0.4]\npaths = 2000\ninterfaces = [\"single\", \"multiple\"]\n\
+         [reference.random]\ncount = 2\nseed = 5\npaths = 1000\n",
     )
     .unwrap();
     let out = lamina(&["--validation", "sweep", "ref.toml", "--out", "res"], &dir);
@@ -302,10 +311,20 @@ fn a_reference_study_compares_each_material_with_the_reference() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("res/study.json")).unwrap())
             .unwrap();
     let compared = meta["reference"].as_array().unwrap();
-    assert_eq!(compared.len(), 4);
+    // Per truth: the two materials, then the two random stacks.
+    assert_eq!(compared.len(), 8);
+    assert!(compared[2]["random_stack"]
+        .as_str()
+        .unwrap()
+        .contains("[[layer]]"));
+    assert_eq!(compared[2]["paths"], 1000);
+    for stack in ["random-00", "random-01"] {
+        let toml = dir.join(format!("res/random-stacks/{stack}.toml"));
+        assert!(lamina::material::Stack::load(&toml).is_ok(), "{stack}");
+    }
     assert_eq!(compared[1]["model"], "tm6");
     assert_eq!(compared[0]["interfaces"], "single");
-    assert_eq!(compared[2]["interfaces"], "multiple");
+    assert_eq!(compared[4]["interfaces"], "multiple");
     for m in compared {
         assert_eq!(m["rows"].as_array().unwrap().len(), 2);
         assert_eq!(m["rows"][0]["slice_model"].as_array().unwrap().len(), 90);
@@ -352,6 +371,9 @@ fn a_reference_study_compares_each_material_with_the_reference() {
         "of 4 (material, view) points",
         "](reference-gold.png)",
         "](reference-gold-multiple.png)",
+        "#### Random stacks",
+        "| single | corrected | 4 |",
+        "](reference-distribution.png)",
     ] {
         assert!(
             report.contains(expected),

@@ -7,6 +7,7 @@ use std::path::Path;
 
 use crate::profile::image_error::{error_map_path, fp32_error_map_path};
 use crate::profile::results::Run;
+use crate::reference::compare::ReferenceRow;
 use crate::study::charts::{pareto_front, reference_chart_stem, run_label};
 use crate::study::dirs::StudyDir;
 use crate::study::{Published, Target};
@@ -296,10 +297,11 @@ pub(super) fn reference_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
             truths.push(&e.interfaces);
         }
     }
-    for truth in truths {
+    for truth in &truths {
         reference_table(md, s, truth);
     }
-    for e in &m.reference {
+    random_stacks_table(md, s, &truths, out_dir);
+    for e in m.reference.iter().filter(|e| e.random_stack.is_none()) {
         let png = s.dir.join(format!(
             "{}.png",
             reference_chart_stem(&e.material, &e.interfaces)
@@ -317,6 +319,72 @@ pub(super) fn reference_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
     }
 }
 
+/// The random stacks' errors per truth and transport: median, 90th percentile and largest
+/// |ΔR|/R (mean of the channels), the points within 5 %, the worst channels within 10 %, and
+/// the distribution chart.
+fn random_stacks_table(md: &mut String, s: &StudyDir, truths: &[&str], out_dir: &Path) {
+    let random: Vec<_> = s
+        .meta
+        .reference
+        .iter()
+        .filter(|e| e.random_stack.is_some())
+        .collect();
+    if random.is_empty() {
+        return;
+    }
+    let stacks = random.iter().filter(|e| e.interfaces == truths[0]).count();
+    let _ = writeln!(
+        md,
+        "#### Random stacks\n\n{stacks} stacks drawn within the presets' ranges \
+         (`material::random::preset_like_stack`, written out under `random-stacks/`), \
+         alternately 2- and 6-flux, {} paths per channel and view cosine.\n",
+        random[0].paths
+    );
+    let _ = writeln!(
+        md,
+        "| truth | transport | points | median | 90th percentile | largest | within 5 % | \
+         worst channel within 10 % |\n|---|---|---|---|---|---|---|---|"
+    );
+    for truth in truths {
+        let rows: Vec<_> = random
+            .iter()
+            .filter(|e| e.interfaces == *truth)
+            .flat_map(|e| &e.rows)
+            .collect();
+        for transport in ["paper", "corrected"] {
+            let of = |r: &ReferenceRow| match transport {
+                "paper" => (r.relative_error(), r.worst_channel(r.model)),
+                _ => (
+                    r.relative_error_corrected(),
+                    r.worst_channel(r.model_corrected),
+                ),
+            };
+            let mut errors: Vec<f64> = rows.iter().map(|r| of(r).0.abs()).collect();
+            errors.sort_by(f64::total_cmp);
+            let at = |q: f64| errors[((q * (errors.len() - 1) as f64).round()) as usize];
+            let within = errors.iter().filter(|e| **e <= 0.05).count();
+            let channels = rows.iter().filter(|r| of(r).1.abs() <= 0.10).count();
+            let _ = writeln!(
+                md,
+                "| {truth} | {transport} | {} | {:.1} % | {:.1} % | {:.1} % | {within} | {channels} |",
+                errors.len(),
+                100.0 * at(0.5),
+                100.0 * at(0.9),
+                100.0 * at(1.0)
+            );
+        }
+    }
+    md.push('\n');
+    let png = s.dir.join("reference-distribution.png");
+    if png.is_file() {
+        let _ = writeln!(
+            md,
+            "![Random stacks: the error's distribution]({})\n",
+            relative(&png, out_dir)
+        );
+    }
+}
+
 /// One truth's table and its reading.
 fn reference_table(md: &mut String, s: &StudyDir, truth: &str) {
     let _ = writeln!(md, "#### Against the `interfaces={truth}` reference\n");
@@ -330,7 +398,8 @@ fn reference_table(md: &mut String, s: &StudyDir, truth: &str) {
     let (mut paper10, mut paper5, mut corrected5, mut worst10, mut n) = (0, 0, 0, 0, 0);
     let mut worst: Option<(f64, &str, f64)> = None;
     let mut slices: (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
-    for e in s.meta.reference.iter().filter(|e| e.interfaces == truth) {
+    let named = s.meta.reference.iter().filter(|e| e.random_stack.is_none());
+    for e in named.filter(|e| e.interfaces == truth) {
         for row in &e.rows {
             let (slice, noise) = row.slice_error();
             let (slice_c, _) = row.slice_error_of(&row.slice_corrected);
