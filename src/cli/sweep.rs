@@ -186,11 +186,22 @@ fn print_plan(args: &SweepArgs, list: &[study::Study], dir_of: &dyn Fn(&study::S
     );
     for s in list {
         if let Some(r) = &s.reference {
+            let random = if r.random.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    " and {} random stack(s) ({} paths)",
+                    r.random.len(),
+                    r.random_paths
+                )
+            };
+            let truths: Vec<String> = r.interfaces.iter().map(|i| i.to_string()).collect();
             println!(
-                "  {:<22} {} material(s) against the stochastic reference at {} view cosine(s), \
-                 {} paths per channel  -> {}",
+                "  {:<22} {} material(s){random} against the stochastic reference ({}) at {} \
+                 view cosine(s), {} paths per channel  -> {}",
                 s.name,
                 r.cases.len(),
+                truths.join(", "),
                 r.cosines.len(),
                 r.paths,
                 dir_of(s).display()

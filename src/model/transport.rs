@@ -15,8 +15,9 @@
 //! must be followed, which [`super::angular`] does.
 //!
 //! So each layer's energy comes from that transport, per material, tabulated at [`POINTS`]
-//! view cosines as the ratio of its energy to the paper model's, and the model's lobes are
-//! scaled by their layer's ratio, interpolated at the view's cosine: the lobes keep the
+//! view cosines as the ratio of its energy to the paper model's (layers the paper gives almost
+//! nothing share a ratio with the next: [`GROUP_SHARE`]), and the model's lobes are scaled by
+//! their layer's ratio, interpolated at the view's cosine: the lobes keep the
 //! paper's shapes (their asymmetry composition), the energies follow light's angles, and a
 //! material with maps keeps its per-pixel variation (the ratio is taken at its nominal
 //! values). The stack's transmittance is scaled the same way.
@@ -33,9 +34,11 @@ pub const POINTS: usize = 16;
 /// The lowest tabulated view cosine (μ = 0 is no view at all).
 pub const LOWEST: f64 = 0.01;
 
-/// Largest ratio a layer takes: where the paper gives a layer almost no energy its ratio is
-/// ill-conditioned, and a map that raises that energy would carry it anywhere.
-pub const MAX_RATIO: f64 = 8.0;
+/// Largest ratio a layer takes, a guard: layers the paper gives almost nothing are grouped
+/// ([`GROUP_SHARE`]), but a variant's own approximations can still leave a layer an order of
+/// magnitude short (`fgd=karis` under a layer denser above, on random stacks), and a map
+/// that raised such a layer's energy would carry the ratio anywhere.
+pub const MAX_RATIO: f64 = 64.0;
 
 /// The tabulated cosine of point k.
 pub fn point(k: usize) -> f64 {
@@ -57,6 +60,47 @@ fn ratio(truth: f64, paper: f64) -> f64 {
     } else {
         1.0
     }
+}
+
+/// Share of the paper's reflectance below which a layer's energy does not get a ratio of its
+/// own: a nearly index-matched rough layer reflects almost nothing in the paper's model, yet
+/// adding it to the transport changes R by redirecting light towards the interfaces below —
+/// a large ratio of two small numbers. Such layers share one ratio with the layers after them
+/// until the group holds this share of R (the last group joins the one before it).
+pub const GROUP_SHARE: f64 = 0.02;
+
+/// Per layer, the ratio of the transport's energies `truth` to the paper's `paper` (one
+/// channel), layers grouped until each group holds [`GROUP_SHARE`] of the paper's R.
+fn grouped_ratios(truth: &[f64], paper: &[f64]) -> Vec<f64> {
+    let floor = (GROUP_SHARE * paper.iter().sum::<f64>()).max(1e-9);
+    let mut groups: Vec<(Vec<usize>, f64, f64)> = Vec::new();
+    let mut open: (Vec<usize>, f64, f64) = (Vec::new(), 0.0, 0.0);
+    for (i, (&a, &p)) in truth.iter().zip(paper).enumerate() {
+        open.0.push(i);
+        open.1 += a;
+        open.2 += p;
+        if open.2 >= floor {
+            groups.push(std::mem::take(&mut open));
+        }
+    }
+    if !open.0.is_empty() {
+        match groups.last_mut() {
+            Some(last) => {
+                last.0.extend(open.0);
+                last.1 += open.1;
+                last.2 += open.2;
+            }
+            None => groups.push(open),
+        }
+    }
+    let mut out = vec![1.0; truth.len()];
+    for (members, a, p) in groups {
+        let r = ratio(a, p);
+        for i in members {
+            out[i] = r;
+        }
+    }
+    out
 }
 
 impl Correction {
@@ -83,11 +127,20 @@ impl Correction {
                 }
             }
             let mut below = [0.0; 3];
-            for (i, r) in cumulative.iter().enumerate() {
-                for c in 0..3 {
-                    per_layer[i][k][c] = ratio(r[c] - below[c], energy[i][c]);
+            let truth: Vec<[f64; 3]> = cumulative
+                .iter()
+                .map(|r| {
+                    let d = std::array::from_fn(|c| r[c] - below[c]);
+                    below = *r;
+                    d
+                })
+                .collect();
+            for c in 0..3 {
+                let a: Vec<f64> = truth.iter().map(|d| d[c]).collect();
+                let p: Vec<f64> = energy.iter().map(|e| e[c]).take(a.len()).collect();
+                for (i, r) in grouped_ratios(&a, &p).into_iter().enumerate() {
+                    per_layer[i][k][c] = r;
                 }
-                below = *r;
             }
             transmittance[k] = std::array::from_fn(|c| ratio(t[c], paper.transmittance[c]));
         }
@@ -198,6 +251,23 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn layers_with_little_energy_share_a_ratio() {
+        // The second layer holds 1e-4 of the paper's R but 0.01 of the truth: alone its
+        // ratio would be 100; grouped with the third, both take (0.01 + 0.4)/(1e-4 + 0.5).
+        let r = grouped_ratios(&[0.1, 0.01, 0.4], &[0.1, 1e-4, 0.5]);
+        assert_eq!(r[0], 1.0);
+        assert!(
+            (r[1] - 0.41 / 0.5001).abs() < 1e-12 && r[1] == r[2],
+            "{r:?}"
+        );
+        // A small last layer joins the group before it; the energies add up either way.
+        let (a, p) = ([0.2, 0.3, 0.001], [0.25, 0.35, 1e-5]);
+        let r = grouped_ratios(&a, &p);
+        let total: f64 = r.iter().zip(&p).map(|(r, p)| r * p).sum();
+        assert!((total - a.iter().sum::<f64>()).abs() < 1e-12, "{r:?}");
     }
 
     #[test]

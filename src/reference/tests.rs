@@ -521,3 +521,83 @@ fn discrete_ordinates_meet_the_walk_in_both_interface_modes() {
         }
     }
 }
+
+#[test]
+fn the_corrected_transport_keeps_the_physical_invariances_on_random_stacks() {
+    // Over random stacks within the presets' ranges: an index-matched interface of any
+    // roughness and a medium of zero depth change nothing, and a lossless stack walked on its
+    // microsurfaces reflects and transmits everything. At the tabulated cosines the corrected
+    // energies are the transport's (exact); between them the ratios are interpolated, and the
+    // change stays within 1 % of R.
+    use crate::material::random::{preset_like_stack, PresetRanges};
+    use crate::material::Stack;
+    use crate::model::fgd::ExactFgd;
+    use crate::model::transport;
+    use crate::model::NoTir;
+    use crate::variant::Model;
+
+    let presets: Vec<Stack> = crate::material::presets()
+        .iter()
+        .map(|p| Stack::load(p).expect("a preset"))
+        .collect();
+    let ranges = PresetRanges::of(&presets);
+    let fgd = ExactFgd::new(G2::HeightCorrelated);
+    let mut rng = crate::model::random::Rng(0x1d_e5);
+    let corrected = |layers: &[LayerParams], model: Model, mode: Interfaces, cosines: &[f64]| {
+        let variant = VariantKey {
+            model,
+            transport: crate::variant::Transport::Corrected,
+            interfaces: mode,
+            ..VariantKey::default()
+        };
+        crate::model::oracle::evaluate_variant(variant, layers, cosines, &fgd, &NoTir)
+    };
+    for k in 0..8 {
+        let model = if k % 2 == 0 { Model::Tm2 } else { Model::Tm6 };
+        let stack = preset_like_stack(&mut rng, &ranges, model, "case");
+        let layers = stack.params();
+        // An index-matched rough layer under the top coat, and a zero-depth medium in it.
+        let mut with = layers.clone();
+        let matched = LayerParams {
+            roughness: rng.range(0.0, 1.0),
+            depth: 0.0,
+            sigma_s: [rng.range(0.0, 3.0); 3],
+            ..LayerParams::dielectric(layers[0].ior[0], 0.0)
+        };
+        if layers[0].diffuse.is_none() && !layers[0].is_conductor() {
+            with.insert(1, matched);
+        } else {
+            continue;
+        }
+        let cosines = [transport::point(4), transport::point(11), 0.37];
+        let a = corrected(&layers, model, Interfaces::Single, &cosines);
+        let b = corrected(&with, model, Interfaces::Single, &cosines);
+        let bounds = cosines.iter().zip([1e-9, 1e-9, 1e-2]);
+        for ((a, b), (mu, tolerance)) in a.iter().zip(&b).zip(bounds) {
+            for c in 0..3 {
+                let (a, b) = (a.reflectance[c], b.reflectance[c]);
+                assert!(
+                    (a - b).abs() <= tolerance * a.max(1e-3),
+                    "case {k}, μ {mu}: {b} against {a}\n{}",
+                    stack.to_toml()
+                );
+            }
+        }
+    }
+    // Lossless: coats without absorption over nothing, multiple-scattering interfaces.
+    for k in 0..4 {
+        let model = if k % 2 == 0 { Model::Tm2 } else { Model::Tm6 };
+        let mut layers: Vec<LayerParams> = (0..2)
+            .map(|_| {
+                LayerParams::dielectric(rng.range(ranges.ior.0, ranges.ior.1), rng.range(0.05, 0.6))
+                    .with_medium(0.3, [rng.range(0.5, 3.0); 3], [0.0; 3], 0.3)
+            })
+            .collect();
+        layers.push(LayerParams::dielectric(1.0, 0.2));
+        let e = &corrected(&layers, model, Interfaces::Multiple, &[transport::point(9)])[0];
+        for c in 0..3 {
+            let sum = e.reflectance[c] + e.transmittance[c];
+            assert!((sum - 1.0).abs() < 1e-6, "case {k}: R + T = {sum}");
+        }
+    }
+}

@@ -147,4 +147,3 @@ fn reference_interfaces(file: &Path, names: Option<&[String]>) -> Result<Vec<Int
             .collect(),
     }
 }
-
