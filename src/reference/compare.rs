@@ -90,6 +90,14 @@ pub struct ReferenceRow {
     /// …and the corrected model's.
     #[serde(default)]
     pub slice_corrected: Vec<[f64; 3]>,
+    /// Total transmittance: the reference's, the paper model's and the corrected model's
+    /// (zero for a stack that ends in a base).
+    #[serde(default)]
+    pub transmittance: Estimate,
+    #[serde(default)]
+    pub transmittance_model: [f64; 3],
+    #[serde(default)]
+    pub transmittance_corrected: [f64; 3],
 }
 
 fn mean3(v: [f64; 3]) -> f64 {
@@ -113,6 +121,19 @@ impl ReferenceRow {
     pub fn relative_error_corrected(&self) -> f64 {
         let r = mean3(self.reference.mean);
         (mean3(self.model_corrected) - r) / r
+    }
+
+    /// (model − reference) / reference of the channels' mean transmittance, for the paper's
+    /// (`corrected` false) or the corrected model; `None` where the stack transmits less than
+    /// 1e-3.
+    pub fn transmittance_error(&self, corrected: bool) -> Option<f64> {
+        let t = mean3(self.transmittance.mean);
+        let model = if corrected {
+            self.transmittance_corrected
+        } else {
+            self.transmittance_model
+        };
+        (t > 1e-3).then(|| (mean3(model) - t) / t)
     }
 
     /// The largest of the channels' relative errors of `model` (in magnitude, signed).
@@ -280,6 +301,9 @@ pub fn compare(
             slice_reference: reference.slice,
             slice_model: model_slice(&model, mu, variant),
             slice_corrected: model_slice(&corrected, mu, variant),
+            transmittance: reference.transmittance,
+            transmittance_model: model.transmittance,
+            transmittance_corrected: corrected.transmittance,
         });
     }
     Ok(Some(MaterialReference {

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use crate::profile::image_error::{error_map_path, fp32_error_map_path};
 use crate::profile::results::Run;
-use crate::reference::compare::ReferenceRow;
+use crate::reference::compare::{MaterialReference, ReferenceRow};
 use crate::study::charts::{pareto_front, reference_chart_stem, run_label};
 use crate::study::dirs::StudyDir;
 use crate::study::{Published, Target};
@@ -301,6 +301,7 @@ pub(super) fn reference_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
         reference_table(md, s, truth);
     }
     random_stacks_table(md, s, &truths, out_dir);
+    transmittance_table(md, &m.reference, &truths);
     for e in m.reference.iter().filter(|e| e.random_stack.is_none()) {
         let png = s.dir.join(format!(
             "{}.png",
@@ -383,6 +384,47 @@ fn random_stacks_table(md: &mut String, s: &StudyDir, truths: &[&str], out_dir: 
             relative(&png, out_dir)
         );
     }
+}
+
+/// The transmissive stacks' T (presets and random, every point that transmits 1e-3 or more):
+/// per truth and transport, the median and largest |ΔT|/T and the points within 5 %.
+fn transmittance_table(md: &mut String, compared: &[MaterialReference], truths: &[&str]) {
+    let transmits = compared
+        .iter()
+        .flat_map(|e| &e.rows)
+        .any(|r| r.transmittance_error(false).is_some());
+    if !transmits {
+        return;
+    }
+    let _ = writeln!(
+        md,
+        "Transmittance, where a stack transmits (T ≥ 1e-3, presets and random stacks):\n\n\
+         | truth | transport | points | median | largest | within 5 % |\n|---|---|---|---|---|---|"
+    );
+    for truth in truths {
+        for (transport, corrected) in [("paper", false), ("corrected", true)] {
+            let mut errors: Vec<f64> = compared
+                .iter()
+                .filter(|e| e.interfaces == *truth)
+                .flat_map(|e| &e.rows)
+                .filter_map(|r| r.transmittance_error(corrected))
+                .map(f64::abs)
+                .collect();
+            if errors.is_empty() {
+                continue;
+            }
+            errors.sort_by(f64::total_cmp);
+            let within = errors.iter().filter(|e| **e <= 0.05).count();
+            let _ = writeln!(
+                md,
+                "| {truth} | {transport} | {} | {:.1} % | {:.1} % | {within} |",
+                errors.len(),
+                100.0 * errors[errors.len() / 2],
+                100.0 * errors[errors.len() - 1]
+            );
+        }
+    }
+    md.push('\n');
 }
 
 /// One truth's table and its reading.
