@@ -129,6 +129,15 @@ fn widen(range: &mut Option<(f64, f64)>, v: f64) {
 }
 
 impl PresetRanges {
+    /// The ranges of the presets (assets/materials).
+    pub fn of_presets() -> Result<Self, super::MaterialError> {
+        let presets = super::presets()
+            .iter()
+            .map(|p| Stack::load(p))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self::of(&presets))
+    }
+
     /// The ranges of `stacks` (each at its nominal values: a map's middle value).
     pub fn of(stacks: &[Stack]) -> Self {
         let (mut ior, mut roughness, mut depth, mut sigma_s, mut sigma_a, mut g, mut albedo) =
@@ -221,11 +230,7 @@ mod tests {
 
     #[test]
     fn preset_like_stacks_are_valid_and_within_the_presets_ranges() {
-        let presets: Vec<Stack> = crate::material::presets()
-            .iter()
-            .map(|p| Stack::load(p).expect("a preset"))
-            .collect();
-        let ranges = PresetRanges::of(&presets);
+        let ranges = PresetRanges::of_presets().expect("the presets");
         assert!(
             ranges.ior.0 < ranges.ior.1 && ranges.conductors.len() >= 4,
             "{ranges:?}"

@@ -27,7 +27,9 @@
 use glam::DVec3;
 
 use super::adding::{avg, map3};
-use super::microfacet::{masking_g1, masking_shadowing, reflect, sample_vndf};
+use super::microfacet::{
+    for_each_visible_normal, for_each_vndf_sample, masking_g1, masking_shadowing, reflect,
+};
 use super::microsurface::{self, Exit};
 use super::random::{case_seed, Rng};
 use super::{fresnel, LayerParams, INDEX_MATCHED, IOR_AIR};
@@ -151,29 +153,22 @@ fn interface_column(mu: f64, eta: f64, alpha: f64, grid: u32, mode: Interfaces) 
     let v = view(mu);
     let w = 1.0 / f64::from(grid * grid);
     let g = G2::HeightCorrelated;
-    for a in 0..grid {
-        for b in 0..grid {
-            let u = (
-                (f64::from(a) + 0.5) / f64::from(grid),
-                (f64::from(b) + 0.5) / f64::from(grid),
-            );
-            let m = sample_vndf(v, u, alpha);
-            let c = v.dot(m).clamp(0.0, 1.0);
-            let f = fresnel::dielectric(c, eta);
-            let l = reflect(v, m);
-            if l.z > 0.0 {
-                r[bin_of(l.z)] +=
-                    w * f * masking_shadowing(g, v.z, l.z, alpha) / masking_g1(g, v.z, alpha);
-            }
-            let ct2 = 1.0 - (1.0 - c * c) / (eta * eta);
-            if ct2 > 0.0 && f < 1.0 {
-                let o = (-v / eta + (c / eta - ct2.sqrt()) * m).normalize();
-                if o.z < 0.0 {
-                    t[bin_of(-o.z)] += w * (1.0 - f) * masking_g1(G2::Smith, -o.z, alpha);
-                }
+    for_each_visible_normal(v, alpha, grid, |m| {
+        let c = v.dot(m).clamp(0.0, 1.0);
+        let f = fresnel::dielectric(c, eta);
+        let l = reflect(v, m);
+        if l.z > 0.0 {
+            r[bin_of(l.z)] +=
+                w * f * masking_shadowing(g, v.z, l.z, alpha) / masking_g1(g, v.z, alpha);
+        }
+        let ct2 = 1.0 - (1.0 - c * c) / (eta * eta);
+        if ct2 > 0.0 && f < 1.0 {
+            let o = (-v / eta + (c / eta - ct2.sqrt()) * m).normalize();
+            if o.z < 0.0 {
+                t[bin_of(-o.z)] += w * (1.0 - f) * masking_g1(G2::Smith, -o.z, alpha);
             }
         }
-    }
+    });
     (r, t)
 }
 
@@ -196,7 +191,7 @@ fn conductor_column(mu: f64, eta: f64, kappa: f64, alpha: f64, grid: u32, mode: 
         return r;
     }
     let g = G2::HeightCorrelated;
-    super::microfacet::for_each_vndf_sample(mu, alpha, grid, |v, h, l| {
+    for_each_vndf_sample(mu, alpha, grid, |v, h, l| {
         r[bin_of(l.z)] += fresnel::conductor(v.dot(h).clamp(0.0, 1.0), eta, kappa)
             * masking_shadowing(g, v.z, l.z, alpha)
             / masking_g1(g, v.z, alpha)
@@ -496,30 +491,30 @@ impl Transport {
                             eta,
                             alpha,
                             boundary,
-                        } => (Some(boundary), First::Interface(*eta, *alpha)),
-                        Step::Medium(channels) => (channels[c].as_ref(), First::Open),
+                        } => (Some(boundary), Some(First::Interface(*eta, *alpha))),
+                        Step::Medium(channels) => (channels[c].as_ref(), None),
                         Step::Base {
                             channels,
                             layer,
                             above,
                         } => {
                             opaque = true;
-                            (Some(&channels[c]), First::Base(layer, *above))
+                            (Some(&channels[c]), Some(First::Base(layer, *above)))
                         }
                     };
                     let Some(b) = b else { continue };
-                    let slab = match slabs[c].take() {
-                        Some(slab) => slab,
-                        None => match first {
-                            First::Open => Slab::open(mu),
-                            first => {
-                                // The top boundary, met at the view's own cosine.
-                                let (reflected, slab) = first.at(mu, b, c, self.mode);
-                                r[c] = reflected;
-                                slabs[c] = Some(slab);
-                                continue;
-                            }
-                        },
+                    let slab = match (slabs[c].take(), first) {
+                        (Some(slab), _) => slab,
+                        // A medium under no boundary (an index-matched top): the view's light
+                        // enters it in its bin.
+                        (None, None) => Slab::open(mu),
+                        (None, Some(first)) => {
+                            // The top boundary, met at the view's own cosine.
+                            let (reflected, slab) = first.at(mu, b, c, self.mode);
+                            r[c] = reflected;
+                            slabs[c] = Some(slab);
+                            continue;
+                        }
                     };
                     let (next, added) = slab.over(b);
                     r[c] += added;
@@ -541,8 +536,6 @@ impl Transport {
 enum First<'a> {
     Interface(f64, f64),
     Base(&'a LayerParams, f64),
-    /// A medium: the view's light enters it in its bin.
-    Open,
 }
 
 impl First<'_> {
@@ -567,7 +560,6 @@ impl First<'_> {
                     (col.iter().sum(), [0.0; BINS])
                 }
             },
-            First::Open => (0.0, Slab::open(mu).down),
         };
         let slab = Slab {
             down,

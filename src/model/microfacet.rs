@@ -88,17 +88,24 @@ pub fn sample_vndf(v: DVec3, u: (f64, f64), alpha: f64) -> DVec3 {
 /// references of the tables are such means (w = F·G2/G1 gives FGD).
 pub fn for_each_vndf_sample(mu: f64, alpha: f64, n: u32, mut f: impl FnMut(DVec3, DVec3, DVec3)) {
     let v = DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+    for_each_visible_normal(v, alpha, n, |h| {
+        let l = reflect(v, h);
+        if l.z > 0.0 {
+            f(v, h, l);
+        }
+    });
+}
+
+/// Calls `f(h)` for each point of an `n`×`n` midpoint grid of the visible-normal sampler's two
+/// uniform variables for the view `v` (v.z > 0): h ~ D_v(h), each point of weight 1/n².
+pub fn for_each_visible_normal(v: DVec3, alpha: f64, n: u32, mut f: impl FnMut(DVec3)) {
     for a in 0..n {
         for b in 0..n {
             let u = (
                 (f64::from(a) + 0.5) / f64::from(n),
                 (f64::from(b) + 0.5) / f64::from(n),
             );
-            let h = sample_vndf(v, u, alpha);
-            let l = reflect(v, h);
-            if l.z > 0.0 {
-                f(v, h, l);
-            }
+            f(sample_vndf(v, u, alpha));
         }
     }
 }

@@ -530,17 +530,12 @@ fn the_corrected_transport_keeps_the_physical_invariances_on_random_stacks() {
     // energies are the transport's (exact); between them the ratios are interpolated, and the
     // change stays within 1 % of R.
     use crate::material::random::{preset_like_stack, PresetRanges};
-    use crate::material::Stack;
     use crate::model::fgd::ExactFgd;
     use crate::model::transport;
     use crate::model::NoTir;
     use crate::variant::Model;
 
-    let presets: Vec<Stack> = crate::material::presets()
-        .iter()
-        .map(|p| Stack::load(p).expect("a preset"))
-        .collect();
-    let ranges = PresetRanges::of(&presets);
+    let ranges = PresetRanges::of_presets().expect("the presets");
     let fgd = ExactFgd::new(G2::HeightCorrelated);
     let mut rng = crate::model::random::Rng(0x1d_e5);
     let corrected = |layers: &[LayerParams], model: Model, mode: Interfaces, cosines: &[f64]| {

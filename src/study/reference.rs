@@ -6,7 +6,6 @@ use std::path::Path;
 
 use crate::error::Result;
 use crate::material::random::{preset_like_stack, PresetRanges};
-use crate::material::Stack;
 use crate::model::random::{case_seed, Rng};
 use crate::profile::plan::Case;
 use crate::variant::{Axis, Interfaces, Model};
@@ -113,11 +112,7 @@ fn random_cases(file: &Path, spec: &RandomSpec) -> Result<Vec<Case>> {
             ));
         }
     }
-    let presets = crate::material::presets()
-        .iter()
-        .map(|p| Stack::load(p))
-        .collect::<std::result::Result<Vec<_>, _>>()?;
-    let ranges = PresetRanges::of(&presets);
+    let ranges = PresetRanges::of_presets()?;
     let mut rng = Rng(case_seed(spec.seed, 0));
     Ok((0..spec.count)
         .map(|k| {

@@ -405,12 +405,7 @@ fn the_corrected_transport_meets_the_committed_references() {
                     let mean = |v: [f64; 3]| (v[0] + v[1] + v[2]) / 3.0;
                     let r = mean(row.reference.mean);
                     let error = (mean(model.reflectance) - r) / r;
-                    let worst = (0..3)
-                        .map(|c| {
-                            ((model.reflectance[c] - row.reference.mean[c]) / row.reference.mean[c])
-                                .abs()
-                        })
-                        .fold(0.0, f64::max);
+                    let worst = row.worst_channel(model.reflectance).abs();
                     // Where the stack transmits, T within the same bounds.
                     let t = mean(row.transmittance.mean);
                     let t_error = if t >= 1e-3 {
