@@ -8,6 +8,12 @@
 // every transfer-matrix variant is divided by. MODEL = tm2 / tm6: the lobes of the
 // transfer-matrix model (lib/tm2.glsl, lib/tm6.glsl), or under MODE_BAKED the material's lobes
 // read from its table (bindings/shading.glsl's baked_lobes) at the view cosine.
+// A stack that transmits (TRANSMITS) is a thin slab: its base's back face is parallel to the
+// stack, so what it transmits leaves along the direction it entered and the pixel sees, through
+// the transmitted lobe (weight T, roughness lib/tm_common.glsl's tm_transmitted_alpha), the
+// environment and lights behind the surface around the view's continuation −v. That lobe is the
+// mirror image, in the tangent plane, of a reflection lobe about reflect(−v, n), and is lit as
+// one, with the directions it reads mirrored (shade_behind).
 // This entry point has texture coordinates: the models read a varying stack's maps.
 #define TM_SURFACE_MAPS
 #include "shared/variant.glsl"
@@ -32,9 +38,17 @@ vec3 shade_v;
 float shade_n_dot_v;
 vec3 shade_sum;
 
-// Pre-filtered radiance of a lobe of roughness α around `r` (the view for back-scatter).
-vec3 lobe_radiance(vec3 n, vec3 r, float alpha) {
+// The mirror image of direction `d` in the tangent plane of normal `n`: where a lobe that
+// transmits through a thin slab reads what a reflection lobe would read at `d`.
+vec3 shade_behind(vec3 n, vec3 d) {
+    return d - 2.0 * dot(n, d) * n;
+}
+
+// Pre-filtered radiance of a lobe of roughness α around `r` (the view for back-scatter), or
+// with `behind` of the transmitted lobe mirrored from it.
+vec3 lobe_radiance(vec3 n, vec3 r, float alpha, bool behind) {
     vec3 dir = ibl_dominant_direction(n, r, alpha);
+    dir = behind ? shade_behind(n, dir) : dir;
     return textureLod(prefiltered, dir, ibl_mip_of_alpha(alpha, frame.params.x)).rgb;
 }
 
@@ -52,8 +66,9 @@ vec3 light_at(uint j, out vec3 l) {
     return irradiance;
 }
 
-// What the analytic lights send back through a lobe of unit weight and roughness α.
-vec3 lobe_lights(float alpha, bool retro) {
+// What the analytic lights send back through a lobe of unit weight and roughness α (`behind`:
+// send through the transmitted lobe, from behind the surface).
+vec3 lobe_lights(float alpha, bool retro, bool behind) {
     vec3 sum = vec3(0.0);
     // LIGHTS = 0: a scene without lights compiles none of this (lavapipe compiles and runs
     // every path a constant does not remove).
@@ -61,6 +76,7 @@ vec3 lobe_lights(float alpha, bool retro) {
     for (uint j = 0u; j < count; ++j) {
         vec3 l;
         vec3 irradiance = light_at(j, l);
+        l = behind ? shade_behind(shade_n, l) : l;
         float a = light_alpha(alpha, lights[j].radiance.w);
         sum += irradiance * light_lobe(shade_n, shade_v, shade_n_dot_v, l, a, retro);
     }
@@ -85,14 +101,20 @@ vec3 diffuse_light() {
     return sum * INV_PI;
 }
 
-// A lobe's radiance: the environment's, scaled, and the lights'.
-vec3 lobe_light(vec3 around, float alpha, bool retro) {
-    vec3 sum = lobe_lights(alpha, retro);
+// A lobe's radiance: the environment's, scaled, and the lights' (`behind`: the transmitted
+// lobe's, mirrored from the reflection lobe around `around`).
+vec3 lobe_light(vec3 around, float alpha, bool retro, bool behind) {
+    vec3 sum = lobe_lights(alpha, retro, behind);
     float scale = frame.params.y;
     if (scale > 0.0) {
-        sum += scale * lobe_radiance(shade_n, around, alpha);
+        sum += scale * lobe_radiance(shade_n, around, alpha, behind);
     }
     return sum;
+}
+
+// What a thin slab transmits towards the view through a lobe of weight `t` and roughness α.
+vec3 transmitted_light(vec3 t, float alpha) {
+    return t * lobe_light(reflect(-shade_v, shade_n), alpha, false, true);
 }
 
 void shade_begin(vec3 p, vec3 n, vec3 v, float n_dot_v) {
@@ -109,7 +131,13 @@ vec3 shade_ggx(vec3 n, vec3 v, float n_dot_v) {
     vec2 ab = texture(split_sum, vec2(n_dot_v, sqrt(alpha))).rg;
     real3 f0 = real3(f0_complex(top.ior.rgb, top.kappa.rgb));
     real3 albedo = f0 * real(ab.x) + real(ab.y);
-    return vec3(real3(lobe_light(reflect(-v, n), alpha, false)) * albedo);
+    vec3 radiance = vec3(real3(lobe_light(reflect(-v, n), alpha, false, false)) * albedo);
+    if (TRANSMITS != 0u) {
+        // The baseline's top interface as a thin slab: what it does not reflect, through a
+        // lobe of its roughness.
+        radiance += transmitted_light(vec3(max(real3(1.0) - albedo, real3(0.0))), alpha);
+    }
+    return radiance;
 }
 
 void tm_emit_lobe(vec3 weight, float alpha, uint kind) {
@@ -119,16 +147,20 @@ void tm_emit_lobe(vec3 weight, float alpha, uint kind) {
     }
     bool retro = kind == LOBE_RETRO;
     vec3 around = retro ? shade_v : reflect(-shade_v, shade_n);
-    shade_sum += weight * lobe_light(around, alpha, retro);
+    shade_sum += weight * lobe_light(around, alpha, retro, false);
 }
 
 vec3 shade_lobes(vec3 n, vec3 v, float n_dot_v) {
     vec3 reflectance;
     vec3 transmittance;
+    float transmitted_alpha;
     if (MODEL == MODEL_TM6) {
-        tm6_evaluate(n_dot_v, reflectance, transmittance);
+        tm6_evaluate(n_dot_v, reflectance, transmittance, transmitted_alpha);
     } else {
-        tm2_evaluate(n_dot_v, reflectance, transmittance);
+        tm2_evaluate(n_dot_v, reflectance, transmittance, transmitted_alpha);
+    }
+    if (TRANSMITS != 0u) {
+        shade_sum += transmitted_light(transmittance, transmitted_alpha);
     }
     return shade_sum;
 }
@@ -147,7 +179,7 @@ vec3 shade_baked(vec3 n, vec3 v, float n_dot_v) {
         float alpha = lobe.a * lobe.a;
         bool retro = tm_bit(RETRO_MASK, k);
         vec3 dir = ibl_dominant_direction(n, retro ? v : mirror, alpha);
-        vec3 radiance = lobe_lights(alpha, retro);
+        vec3 radiance = lobe_lights(alpha, retro, false);
         if (frame.params.y > 0.0) {
             float mip = lobe.a * (frame.params.x - 1.0);
             radiance += frame.params.y * textureLod(prefiltered, dir, mip).rgb;
@@ -210,9 +242,9 @@ vec3 reference_cone(vec3 axis, float radius) {
     return basis(axis) * vec3(sin_t * cos(phi), sin_t * sin(phi), cos_t);
 }
 
-// The lights through a lobe: `diffuse`, μ_l/π; else reference_lobe about `view`. A disk light
-// averages its cone.
-vec3 reference_lights(vec3 n, vec3 view, float alpha, bool diffuse) {
+// The lights through a lobe: `diffuse`, μ_l/π; else reference_lobe about `view` (`behind`:
+// the transmitted lobe, lit from the mirrored directions). A disk light averages its cone.
+vec3 reference_lights(vec3 n, vec3 view, float alpha, bool diffuse, bool behind) {
     vec3 sum = vec3(0.0);
     uint count = LIGHTS != 0u ? light_info.x : 0u;
     for (uint j = 0u; j < count; ++j) {
@@ -223,6 +255,7 @@ vec3 reference_lights(vec3 n, vec3 view, float alpha, bool diffuse) {
         float value = 0.0;
         for (uint s = 0u; s < samples; ++s) {
             vec3 l = radius > 0.0 ? reference_cone(centre, radius) : centre;
+            l = behind ? shade_behind(n, l) : l;
             value += diffuse ? max(dot(n, l), 0.0) * INV_PI : reference_lobe(n, view, l, alpha);
         }
         sum += irradiance * (value / float(samples));
@@ -275,10 +308,11 @@ vec3 reference_env_sample() {
 
 // One sample's share under the balance heuristic: f·(L − c) / (pdf + the environment's pdf),
 // for a direction either technique drew (f: the lobe's f·μ_l; pdf: the lobe's density there;
-// c: the control variate, reference_environment).
-vec3 reference_mis(float f, float pdf, vec3 world, vec3 c) {
-    float both = pdf + reference_env_pdf(world);
-    return both > 0.0 ? f / both * (textureLod(prefiltered, world, 0.0).rgb - c) : vec3(0.0);
+// `seen`: where the environment is read, the lobe's direction or its mirror image behind the
+// surface; c: the control variate, reference_environment).
+vec3 reference_mis(float f, float pdf, vec3 seen, vec3 c) {
+    float both = pdf + reference_env_pdf(seen);
+    return both > 0.0 ? f / both * (textureLod(prefiltered, seen, 0.0).rgb - c) : vec3(0.0);
 }
 
 // The unfiltered environment through a lobe of roughness α about `view` (`diffuse`: μ_l/π),
@@ -290,7 +324,10 @@ vec3 reference_mis(float f, float pdf, vec3 world, vec3 c) {
 // unbiased for any c constant over the samples, and c is the prefiltered environment along
 // the lobe (the irradiance's over π for a diffuse lobe), so that only the environment's
 // departure from its filtered value is sampled. Under a uniform environment it is exact.
-vec3 reference_environment(vec3 n, vec3 view, float alpha, bool diffuse, float white) {
+// `behind`: the transmitted lobe, which reads the environment at the mirror images of the
+// lobe's directions (and draws those mirror images from the environment's sampling).
+vec3 reference_environment(vec3 n, vec3 view, float alpha, bool diffuse, bool behind,
+                           float white) {
     mat3 frame_of_n = basis(n);
     vec3 v = transpose(frame_of_n) * view;
     if (!diffuse && v.z <= 0.0) {
@@ -299,7 +336,7 @@ vec3 reference_environment(vec3 n, vec3 view, float alpha, bool diffuse, float w
     float g1 = 1.0 / (1.0 + smith_lambda(v.z, alpha));
     vec3 c = diffuse
         ? ibl_irradiance(n, frame.irradiance) * INV_PI
-        : lobe_radiance(n, reflect(-view, n), alpha);
+        : lobe_radiance(n, reflect(-view, n), alpha, behind);
     vec3 sum = vec3(0.0);
     for (uint s = 0u; s < REFERENCE_SAMPLES; ++s) {
         // Through the lobe.
@@ -316,10 +353,11 @@ vec3 reference_environment(vec3 n, vec3 view, float alpha, bool diffuse, float w
             vec3 world = frame_of_n * l;
             float f = diffuse ? l.z * INV_PI : reference_lobe(n, view, world, alpha);
             float pdf = diffuse ? l.z * INV_PI : f * g1 / max(masking_shadowing(l.z, v.z, alpha), 1e-30);
-            sum += reference_mis(f, pdf, world, c);
+            sum += reference_mis(f, pdf, behind ? shade_behind(n, world) : world, c);
         }
         // From the environment.
-        vec3 world = reference_env_sample();
+        vec3 seen = reference_env_sample();
+        vec3 world = behind ? shade_behind(n, seen) : seen;
         float n_dot_l = dot(n, world);
         if (n_dot_l > 0.0) {
             float f;
@@ -333,7 +371,7 @@ vec3 reference_environment(vec3 n, vec3 view, float alpha, bool diffuse, float w
                 f = d * masking_shadowing(n_dot_l, v.z, alpha) / (4.0 * v.z);
                 pdf = g1 * d / (4.0 * v.z);
             }
-            sum += reference_mis(f, pdf, world, c);
+            sum += reference_mis(f, pdf, seen, c);
         }
     }
     return c * white + sum / float(REFERENCE_SAMPLES);
@@ -342,17 +380,20 @@ vec3 reference_environment(vec3 n, vec3 view, float alpha, bool diffuse, float w
 vec3 shade_reference(vec3 n, vec3 v, float n_dot_v) {
     float u = (sqrt(n_dot_v) * float(BAKED_SIZE - 1u) + 0.5) / float(BAKED_SIZE);
     vec3 sum = vec3(0.0);
-    // Two rows per lobe (render/reference.rs): (weight / E, √α), then (E, 0, 0, 0).
+    // Two rows per lobe (render/reference.rs): (weight / E, √α), then (E, behind, 0, 0), behind
+    // 1 for the lobe a stack that transmits sends through (the last).
     float rows = float(2u * LOBE_COUNT);
     for (uint k = 0u; k < LOBE_COUNT; ++k) {
         vec4 lobe = textureLod(baked_lobes, vec2(u, (float(2u * k) + 0.5) / rows), 0.0);
-        float white = textureLod(baked_lobes, vec2(u, (float(2u * k) + 1.5) / rows), 0.0).r;
+        vec2 white = textureLod(baked_lobes, vec2(u, (float(2u * k) + 1.5) / rows), 0.0).rg;
         bool diffuse = lobe.a < 0.0;
+        bool behind = white.y > 0.5;
         float alpha = lobe.a * lobe.a;
         vec3 view = tm_bit(RETRO_MASK, k) ? 2.0 * dot(n, v) * n - v : v;
-        vec3 radiance = reference_lights(n, view, alpha, diffuse);
+        vec3 radiance = reference_lights(n, view, alpha, diffuse, behind);
         if (frame.params.y > 0.0) {
-            radiance += frame.params.y * reference_environment(n, view, alpha, diffuse, white);
+            radiance += frame.params.y
+                * reference_environment(n, view, alpha, diffuse, behind, white.x);
         }
         sum += lobe.rgb * radiance;
     }

@@ -1,8 +1,8 @@
 #version 460
 // Evaluates the model at given view cosines for one stack: the GPU side of `lamina eval
 // --backend gpu` and of the GPU-vs-CPU tests. Same library code as the forward pass.
-// Output per sample, `stride` vec4s: (R, lobe count), (T, retro mask), then (weight, α) per
-// lobe; the retro mask's bits (bit k: lobe k is lit around the view, LOBE_RETRO; the first 32
+// Output per sample, `stride` vec4s: (R, lobe count), (T, retro mask), (the transmitted
+// lobe's α, 0, 0, 0), then (weight, α) per lobe; the retro mask's bits (bit k: lobe k is lit around the view, LOBE_RETRO; the first 32
 // lobes) are stored as the float's bits. With `lit`, each sample also carries a light direction
 // l (the normal is +z, the view (√(1 − μ²), 0, μ)) and a lobe's slot holds, in place of its
 // weight, its response to a unit irradiance from l (weight × lib/light.glsl's light_lobe at
@@ -65,18 +65,20 @@ void main() {
         return;
     }
     uint base = i * push.stride;
-    eval_first_lobe = base + 2u;
+    eval_first_lobe = base + 3u;
     eval_lobes = 0u;
     eval_retro = 0u;
     vec3 reflectance;
     vec3 transmittance;
+    float transmitted_alpha;
     vec4 sample_i = samples.cos_and_light[i];
     float mu = sample_i.x;
     eval_mu = mu;
     eval_light = sample_i.yzw;
     uint count = MODEL == MODEL_TM6
-        ? tm6_evaluate(mu, reflectance, transmittance)
-        : tm2_evaluate(mu, reflectance, transmittance);
+        ? tm6_evaluate(mu, reflectance, transmittance, transmitted_alpha)
+        : tm2_evaluate(mu, reflectance, transmittance, transmitted_alpha);
     results.values[base] = vec4(reflectance, float(count));
     results.values[base + 1u] = vec4(transmittance, uintBitsToFloat(eval_retro));
+    results.values[base + 2u] = vec4(transmitted_alpha, 0.0, 0.0, 0.0);
 }

@@ -18,6 +18,10 @@ pub struct EvalSample {
     pub cos_theta: f64,
     pub reflectance: [f64; 3],
     pub transmittance: [f64; 3],
+    /// GGX α of the lobe the stack transmits, as the forward pass shades it (a thin slab:
+    /// `model::transmitted_alpha`); absent where nothing is transmitted.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub transmitted_roughness: Option<f64>,
     pub lobes: Vec<EvalLobe>,
 }
 
@@ -37,6 +41,11 @@ impl EvalSample {
             cos_theta,
             reflectance: evaluation.reflectance,
             transmittance: evaluation.transmittance,
+            transmitted_roughness: evaluation
+                .transmittance
+                .iter()
+                .any(|&t| t > 0.0)
+                .then_some(evaluation.transmitted_roughness),
             lobes: evaluation
                 .lobes
                 .iter()
@@ -59,8 +68,11 @@ impl EvalReport {
         );
         let rgb = |v: [f64; 3]| format!("{:.5} {:.5} {:.5}", v[0], v[1], v[2]);
         for s in &self.samples {
+            let through = s
+                .transmitted_roughness
+                .map_or(String::new(), |a| format!(" through α {a:.4}"));
             out += &format!(
-                "cos θ = {:.4}   R = {}   T = {}\n",
+                "cos θ = {:.4}   R = {}   T = {}{through}\n",
                 s.cos_theta,
                 rgb(s.reflectance),
                 rgb(s.transmittance)

@@ -341,6 +341,10 @@ pub struct ShadeSpec {
     pub lights: u32,
     /// The `transport` axis (id 21).
     pub transport: u32,
+    /// 1: the stack may end in a dielectric and transmit (`model::ends_transmissive`): the
+    /// forward pass shades the transmitted lobe; 0 folds its code away. Set per material for
+    /// the forward pass, always for the GPU evaluator's generic kernel.
+    pub transmits: u32,
     /// `specialized-values`: the layers' values (see [`LAYER_VALUES`]).
     pub values: [[f32; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
 }
@@ -351,7 +355,7 @@ impl Default for ShadeSpec {
     }
 }
 
-const AXIS_ENTRIES: usize = 22;
+const AXIS_ENTRIES: usize = 23;
 const VALUE_ENTRIES: usize = (MAX_LAYERS_LIMIT * VALUES_PER_LAYER) as usize;
 
 const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENTRIES] {
@@ -360,7 +364,7 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
         offset: 0,
         size: 4,
     }; AXIS_ENTRIES + VALUE_ENTRIES];
-    // ids 0…21 are the u32 fields in declaration order, 4 bytes apart from offset 0.
+    // ids 0…22 are the u32 fields in declaration order, 4 bytes apart from offset 0.
     let mut i = 0;
     while i < AXIS_ENTRIES {
         out[i].id = i as u32;
@@ -376,7 +380,7 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
     out
 }
 
-const _: () = assert!(std::mem::offset_of!(ShadeSpec, transport) == 4 * (AXIS_ENTRIES - 1));
+const _: () = assert!(std::mem::offset_of!(ShadeSpec, transmits) == 4 * (AXIS_ENTRIES - 1));
 
 impl crate::vk::SpecConstants for ShadeSpec {
     const ENTRIES: &'static [crate::vk::SpecEntry] = &shade_spec_entries();
@@ -407,6 +411,7 @@ impl VariantKey {
             diffuse_base: 0,
             lights: 0,
             transport: self.transport.code(),
+            transmits: 0,
             values: [[0.0; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
         }
     }

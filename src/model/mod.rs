@@ -154,6 +154,21 @@ pub fn ends_diffuse(layers: &[LayerParams]) -> bool {
     layers.last().is_some_and(LayerParams::is_diffuse)
 }
 
+/// Whether a stack ends in a dielectric (neither a conductor nor a diffuse base), so that it
+/// transmits: a pass for it shades what it transmits (`ShadeSpec::transmits`).
+pub fn ends_transmissive(layers: &[LayerParams]) -> bool {
+    layers.last().is_some_and(|l| !l.is_opaque_base())
+}
+
+/// The roughness of the lobe a stack transmits, as the forward pass shades it (a thin slab:
+/// the base's back face is parallel to the stack, so light leaves it along the direction it
+/// entered): the primary path's asymmetry in the base, `g_t0` (§4.4's first-order
+/// transmitted asymmetry), refracted back out through that face into the outside medium of
+/// the base's index `eta_base` (mean over RGB). `tm_transmitted_alpha` in lib/tm_common.glsl.
+pub fn transmitted_alpha(g_t0: f64, eta_base: f64) -> f64 {
+    hg::alpha_of_g(hg::refract(g_t0, eta_base / IOR_AIR))
+}
+
 /// One reflected lobe: its RGB energy (directional albedo) and GGX roughness α.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lobe {
@@ -180,6 +195,9 @@ pub struct Evaluation {
     /// Bit k: lobe k is centred on the view rather than its mirror direction (a 6-flux
     /// secondary-backward lobe, lit around the view; the first 32 lobes).
     pub retro_mask: u32,
+    /// The GGX roughness of the lobe the stack transmits ([`transmitted_alpha`]); what it
+    /// carries is `transmittance`.
+    pub transmitted_roughness: f64,
 }
 
 /// Directional albedo of a rough interface: FGD(μ, α, η, κ) = ∫ F·D·G2 / (4μ) dω_o.

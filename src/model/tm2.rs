@@ -155,9 +155,11 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
             break;
         }
     }
+    let eta_base = stack.last().map_or(IOR_AIR, |l| avg(l.ior));
     Evaluation {
         reflectance: r_prev,
         transmittance,
+        transmitted_roughness: super::transmitted_alpha(g_t0i, eta_base),
         // One lobe per layer, in order.
         lobe_layers: (0..lobes.len()).collect(),
         lobes,

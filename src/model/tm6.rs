@@ -42,7 +42,7 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
         let step = walk.medium(layer);
         walk.add(step);
     }
-    walk.finish()
+    walk.finish(stack)
 }
 
 /// The walk down the stack so far: the energy slab `e` and the asymmetry slab `g` (their
@@ -258,9 +258,11 @@ impl Walk {
         }
     }
 
-    fn finish(self) -> Evaluation {
+    fn finish(self, stack: &[LayerParams]) -> Evaluation {
         let prev = self.prev;
+        let eta_base = stack.last().map_or(IOR_AIR, |l| avg(l.ior));
         Evaluation {
+            transmitted_roughness: super::transmitted_alpha(self.g_t0i, eta_base),
             reflectance: map3(|c| prev[0][c] + prev[1][c] + prev[2][c]),
             transmittance: self.transmittance,
             lobes: self.lobes,

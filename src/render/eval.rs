@@ -132,7 +132,10 @@ impl<'g> GpuEvaluator<'g> {
         let kernel = if variant.mode.per_material() {
             None
         } else {
-            Some(Self::kernel(gpu, &inputs, variant, variant.spec())?)
+            // With the transmitted lobe's code, so that every stack reports its roughness.
+            let mut spec = variant.spec();
+            spec.transmits = 1;
+            Some(Self::kernel(gpu, &inputs, variant, spec)?)
         };
         Ok(Self {
             gpu,
@@ -265,7 +268,7 @@ impl<'g> GpuEvaluator<'g> {
             return Ok(Vec::new());
         }
         let device = &self.gpu.device;
-        let stride = 2 + self.max_lobes(layers.len());
+        let stride = 3 + self.max_lobes(layers.len());
         let correction = self.correction(layers);
         let material = material_buffer(device, layers, None, correction.as_ref(), "eval material")?;
         let shading = self
@@ -313,7 +316,8 @@ fn unpack(chunk: &[[f32; 4]]) -> GpuEvaluation {
         evaluation: Evaluation {
             reflectance: rgb(chunk[0]),
             transmittance: rgb(chunk[1]),
-            lobes: chunk[2..2 + lobe_count]
+            transmitted_roughness: f64::from(chunk[2][0]),
+            lobes: chunk[3..3 + lobe_count]
                 .iter()
                 .map(|&v| Lobe {
                     weight: rgb(v),

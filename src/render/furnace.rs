@@ -1,5 +1,6 @@
 //! The white furnace: a material under a uniform white environment reflects exactly its
-//! directional albedo, so the image measures the energy the shading path returns per view angle.
+//! directional albedo (and, for a stack that transmits, shows its transmittance from behind),
+//! so the image measures the energy the shading path returns per view angle.
 //!
 //! The GPU side renders the sphere under a constant environment of radiance 1 and averages the
 //! pixels by the cosine between normal and view (computed on the CPU from the camera and the
@@ -11,7 +12,7 @@ use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
 use crate::model::oracle;
-use crate::model::LayerParams;
+use crate::model::{ends_transmissive, LayerParams};
 use crate::stats::MinMeanMax;
 use crate::tables::environment::EnvDesc;
 use crate::variant::{Model, VariantKey};
@@ -101,9 +102,12 @@ pub fn sphere_cosine(eye: Vec3, dir: Vec3) -> Option<f64> {
 }
 
 /// The CPU side: the oracle's total reflectance ([`oracle::evaluate`]) for `variant` at each
-/// view cosine. The `ggx` baseline shades the top layer alone with one GGX lobe, so its
-/// reference is that layer through the 2-flux model.
+/// view cosine, and its transmittance where the stack transmits (the forward pass shows what
+/// a thin slab transmits from behind, where the environment is white too). The `ggx` baseline
+/// shades the top layer alone with one GGX lobe, so its reference is that layer through the
+/// 2-flux model.
 pub fn cpu(variant: VariantKey, layers: &[LayerParams], cosines: &[f64]) -> Vec<FurnaceBin> {
+    let transmits = ends_transmissive(layers);
     let (variant, layers) = match variant.model {
         Model::Ggx => (
             VariantKey {
@@ -116,10 +120,14 @@ pub fn cpu(variant: VariantKey, layers: &[LayerParams], cosines: &[f64]) -> Vec<
     };
     cosines
         .iter()
-        .map(|&cos_theta| FurnaceBin {
-            cos_theta,
-            energy: oracle::evaluate(variant, layers, cos_theta).reflectance,
-            samples: 1,
+        .map(|&cos_theta| {
+            let e = oracle::evaluate(variant, layers, cos_theta);
+            let t = if transmits { e.transmittance } else { [0.0; 3] };
+            FurnaceBin {
+                cos_theta,
+                energy: std::array::from_fn(|c| e.reflectance[c] + t[c]),
+                samples: 1,
+            }
         })
         .collect()
 }

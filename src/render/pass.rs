@@ -11,7 +11,7 @@
 
 use crate::error::{Error, Result};
 use crate::material::Surface;
-use crate::model::{ends_diffuse, LayerParams};
+use crate::model::{ends_diffuse, ends_transmissive, LayerParams};
 use crate::shader::specialize::{
     check_generic_fit, specialize_values, BakedShape, SpecializeError, Structure,
 };
@@ -48,6 +48,8 @@ pub struct PassKey {
     pub surface: u32,
     /// The stack ends in a diffuse base (`DIFFUSE_BASE`).
     pub diffuse: bool,
+    /// The stack ends in a dielectric and transmits (`TRANSMITS`).
+    pub transmits: bool,
     /// The scene has analytic lights (`LIGHTS`).
     pub lights: bool,
 }
@@ -77,6 +79,13 @@ impl PassKey {
                      pixel"
                 )));
             }
+            if variant.mode == Mode::Baked && ends_transmissive(layers) {
+                return Err(Error::Unsupported(format!(
+                    "variant {variant}: this stack ends in a dielectric and transmits; \
+                     mode=baked tabulates reflected lobes only and cannot render what it \
+                     transmits (use mode=specialized or mode=generic)"
+                )));
+            }
             let structure =
                 Structure::for_variant(variant, layers).map_err(|e| specialize(variant, e))?;
             if variant.mode == Mode::Specialized {
@@ -95,6 +104,7 @@ impl PassKey {
             material,
             surface: surface.map_or(0, |s| s.maps.spec_bits()),
             diffuse: ends_diffuse(layers),
+            transmits: ends_transmissive(layers),
             lights: !lighting.lights.is_empty(),
         })
     }
@@ -119,6 +129,7 @@ impl PassKey {
             material: MaterialKey::Reference(layers.to_vec()),
             surface: 0,
             diffuse: ends_diffuse(layers),
+            transmits: ends_transmissive(layers),
             lights: !lighting.lights.is_empty(),
         }
     }
@@ -151,6 +162,7 @@ impl PassKey {
         }
         spec.surface_maps = self.surface;
         spec.diffuse_base = u32::from(self.diffuse);
+        spec.transmits = u32::from(self.transmits);
         spec.lights = u32::from(self.lights);
         spec
     }
@@ -159,6 +171,16 @@ impl PassKey {
     /// fits a generic pass, a stack of the same structure under `specialized`, the same stack
     /// under the other modes.
     pub fn admits(&self, layers: &[LayerParams]) -> Result<()> {
+        if ends_transmissive(layers) != self.transmits {
+            let kind = |t: bool| if t { "transmits" } else { "is opaque" };
+            return Err(Error::Unsupported(format!(
+                "this pass ({}) was built for a stack that {} and this one {}; prepare a pass \
+                 for this stack",
+                self.variant,
+                kind(self.transmits),
+                kind(!self.transmits)
+            )));
+        }
         if ends_diffuse(layers) != self.diffuse {
             let kind = |d: bool| if d { "ends in" } else { "has no" };
             return Err(Error::Unsupported(format!(

@@ -21,7 +21,7 @@ use crate::error::{Error, Result};
 use crate::model::fgd::ExactFgd;
 use crate::model::light::{lobe_albedo, MIN_ALPHA};
 use crate::model::oracle::evaluate_model;
-use crate::model::LayerParams;
+use crate::model::{ends_transmissive, LayerParams, Lobe};
 use crate::reference::compare::ExactTir;
 use crate::shader::specialize::{BakedShape, MAX_BAKED_LOBES};
 use crate::variant::{Model, G2};
@@ -46,8 +46,11 @@ pub const MAX_SPP: u32 = 1 << 20;
 const FGD_GRID: u32 = 256;
 
 /// The exact model's lobes over the view cosine, as the reference pass reads them: two rows per
-/// lobe, (weight / E, √α) then (E, 0, 0, 0) per sample, √α = −1 for a diffuse base's lobe
-/// (E = 1). The table's `lobe_count` counts rows; its `retro_mask`, lobes.
+/// lobe, (weight / E, √α) then (E, behind, 0, 0) per sample, √α = −1 for a diffuse base's lobe
+/// (E = 1). A stack that transmits (`model::ends_transmissive`) adds, last, the lobe it
+/// transmits as the forward pass shades it (a thin slab: weight T, roughness
+/// `Evaluation::transmitted_roughness`), with behind = 1: lit from behind the surface. The
+/// table's `lobe_count` counts rows; its `retro_mask`, lobes; its `kept`, the reflected ones.
 pub fn lobe_table(model: Model, layers: &[LayerParams]) -> Result<BakedTable> {
     let fgd = ExactFgd {
         g2: G2_FORM,
@@ -76,10 +79,12 @@ pub fn lobe_table(model: Model, layers: &[LayerParams]) -> Result<BakedTable> {
                 .any(|e| e.lobes[k].weight.iter().any(|&w| w > 0.0))
         })
         .collect();
-    if kept.len() > MAX_BAKED_LOBES {
+    let transmits = ends_transmissive(layers);
+    let slots = kept.len() + usize::from(transmits);
+    if slots > MAX_BAKED_LOBES {
         return Err(Error::Unsupported(format!(
-            "the reference holds at most {MAX_BAKED_LOBES} lobes; the stack has {}",
-            kept.len()
+            "the reference holds at most {MAX_BAKED_LOBES} lobes; the stack has {slots} \
+             (the transmitted one included)"
         )));
     }
     let mut retro_mask = 0;
@@ -88,11 +93,22 @@ pub fn lobe_table(model: Model, layers: &[LayerParams]) -> Result<BakedTable> {
             retro_mask |= 1 << slot;
         }
     }
-    let rows: Vec<[[f32; 4]; 2]> = (0..kept.len() * size as usize)
+    let rows: Vec<[[f32; 4]; 2]> = (0..slots * size as usize)
         .into_par_iter()
         .map(|t| {
-            let (k, j) = (kept[t / size as usize], t % size as usize);
-            let lobe = evaluations[j].lobes[k];
+            let (slot, j) = (t / size as usize, t % size as usize);
+            let e = &evaluations[j];
+            let (lobe, behind) = match kept.get(slot) {
+                Some(&k) => (e.lobes[k], 0.0),
+                None => (
+                    Lobe {
+                        weight: e.transmittance,
+                        roughness: e.transmitted_roughness,
+                        diffuse: false,
+                    },
+                    1.0,
+                ),
+            };
             let w = lobe.weight;
             if lobe.diffuse {
                 return [
@@ -105,7 +121,7 @@ pub fn lobe_table(model: Model, layers: &[LayerParams]) -> Result<BakedTable> {
             let w = w.map(|w| (w / white) as f32);
             [
                 [w[0], w[1], w[2], alpha.sqrt() as f32],
-                [white as f32, 0.0, 0.0, 0.0],
+                [white as f32, behind, 0.0, 0.0],
             ]
         })
         .collect();
@@ -117,7 +133,7 @@ pub fn lobe_table(model: Model, layers: &[LayerParams]) -> Result<BakedTable> {
     }
     Ok(BakedTable {
         shape: BakedShape {
-            lobe_count: 2 * kept.len() as u32,
+            lobe_count: 2 * slots as u32,
             retro_mask,
             size,
         },

@@ -25,4 +25,5 @@ mod structure;
 mod surface;
 mod sweep;
 mod tables;
+mod transmission;
 mod viewer;

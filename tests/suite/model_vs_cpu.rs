@@ -307,8 +307,8 @@ fn at_a_threshold(layers: &[LayerParams]) -> bool {
 }
 
 /// Largest absolute difference of the energies (R, T, lobe weights) and of the HG g of the
-/// lobes that carry at least 1 % of the light (their α as g: α(g) is steep near α = 1, where a
-/// g off by 5e-4 moves α by 2.5e-3).
+/// lobes that carry at least 1 % of the light, the transmitted one included (their α as g:
+/// α(g) is steep near α = 1, where a g off by 5e-4 moves α by 2.5e-3).
 fn differences(gpu: &Evaluation, cpu: &Evaluation) -> (f64, f64) {
     let mut energy = 0.0f64;
     let mut alpha = 0.0f64;
@@ -324,6 +324,10 @@ fn differences(gpu: &Evaluation, cpu: &Evaluation) -> (f64, f64) {
             let lobe_g = |alpha: f64| hg::g_of_alpha(alpha);
             alpha = alpha.max((lobe_g(g.roughness) - lobe_g(l.roughness)).abs());
         }
+    }
+    if cpu.transmittance.iter().sum::<f64>() / 3.0 >= 0.01 {
+        let (g, l) = (gpu.transmitted_roughness, cpu.transmitted_roughness);
+        alpha = alpha.max((hg::g_of_alpha(g) - hg::g_of_alpha(l)).abs());
     }
     (energy, alpha)
 }

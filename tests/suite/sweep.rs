@@ -7,6 +7,7 @@ use std::process::Command;
 use common::{lamina, text};
 use lamina::profile::counter::CounterSizes;
 use lamina::render::scene::Scene;
+use lamina::material::presets;
 use lamina::study;
 
 const SMALL: &str = r#"
@@ -458,7 +459,7 @@ fn every_committed_sweep_file_expands() {
     for s in &studies {
         if let Some(r) = &s.reference {
             // The model against the stochastic reference: every preset, nothing timed.
-            assert_eq!(r.cases.len(), 13, "{}", s.name);
+            assert_eq!(r.cases.len(), presets().len(), "{}", s.name);
             assert!(s.points.is_empty() && s.counter.is_none(), "{}", s.name);
             continue;
         }

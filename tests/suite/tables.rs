@@ -170,18 +170,21 @@ fn every_tir_and_fgd_value_renders_every_preset_finite(model: &str) {
         let variant: VariantKey = format!("model={model},{axis},max_layers=5")
             .parse()
             .unwrap();
-        // One pass for the stacks that end in a diffuse base, one for the others
-        // (`ShadeSpec::diffuse_base`).
+        // One pass for the stacks that end in a diffuse base, one for those that transmit, one
+        // for the others (`ShadeSpec::diffuse_base`, `ShadeSpec::transmits`).
         let ceramic = Stack::resolve("glazed-ceramic").unwrap().params();
-        let plain = renderer.prepare_uniform(variant, &[]).unwrap();
-        let diffuse = renderer.prepare_uniform(variant, &ceramic).unwrap();
+        let glass = Stack::resolve("amber-glass").unwrap().params();
+        let passes = [
+            renderer.prepare_uniform(variant, &[]).unwrap(),
+            renderer.prepare_uniform(variant, &ceramic).unwrap(),
+            renderer.prepare_uniform(variant, &glass).unwrap(),
+        ];
         for stack in &stacks {
             let layers = stack.params();
-            let pass = if diffuse.key.admits(&layers).is_ok() {
-                &diffuse
-            } else {
-                &plain
-            };
+            let pass = passes
+                .iter()
+                .find(|p| p.key.admits(&layers).is_ok())
+                .expect("a pass for every kind of stack");
             let frame = renderer.render(pass, &layers, 40, 40).unwrap();
             assert!(
                 frame.pixels.iter().all(|p| p.iter().all(|c| c.is_finite())),

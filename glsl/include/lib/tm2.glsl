@@ -189,8 +189,10 @@ void tm2_add(uint i, Tm2Factors c, float g_next, inout Tm2State s, inout vec3 tr
 
 // Pass 2: compose the components top to bottom by the adding equations and emit one lobe per
 // layer through tm_emit_lobe (§4.2–4.6). Returns the lobe count (= layers); `reflectance` and
-// `transmittance` get the stack totals.
-uint tm2_evaluate(float mu, out vec3 reflectance, out vec3 transmittance) {
+// `transmittance` get the stack totals, `transmitted_alpha` the roughness of the transmitted
+// lobe (tm_transmitted_alpha; 0 where TRANSMITS is 0).
+uint tm2_evaluate(float mu, out vec3 reflectance, out vec3 transmittance,
+                  out float transmitted_alpha) {
     Tm2Factors comps[MAX_LAYERS];
     uint count;
     tm2_factors(mu, comps, count);
@@ -211,6 +213,7 @@ uint tm2_evaluate(float mu, out vec3 reflectance, out vec3 transmittance) {
     }
     reflectance = TRANSPORT == TRANSPORT_CORRECTED ? s.emitted : vec3(s.r_prev);
     transmittance = tm_transported_transmittance(s.at, transmittance);
+    transmitted_alpha = TRANSMITS != 0u ? tm_transmitted_alpha(s.g_t0i, count) : 0.0;
     return count;
 }
 

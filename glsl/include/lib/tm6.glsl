@@ -416,10 +416,11 @@ bool tm6_step(uint step, uint layers, inout Tm6Walk w, inout vec3 transmittance)
     return substrate;
 }
 
-// Walks the stack top to bottom for view cosine `mu` (tm6_step). Returns the lobe count. A
-// specialized pipeline knows the substrate is the last layer: its walk has a constant length
-// (one step fewer over a conductor) and unrolls.
-uint tm6_evaluate(float mu, out vec3 reflectance, out vec3 transmittance) {
+// Walks the stack top to bottom for view cosine `mu` (tm6_step). Returns the lobe count;
+// `transmitted_alpha` as tm2_evaluate's. A specialized pipeline knows the substrate is the last
+// layer: its walk has a constant length (one step fewer over a conductor) and unrolls.
+uint tm6_evaluate(float mu, out vec3 reflectance, out vec3 transmittance,
+                  out float transmitted_alpha) {
     Tm6Walk w;
     w.e = tm6_slab_empty();
     w.g = tm6_slab_empty();
@@ -455,6 +456,9 @@ uint tm6_evaluate(float mu, out vec3 reflectance, out vec3 transmittance) {
     }
     reflectance = TRANSPORT == TRANSPORT_CORRECTED ? w.emitted : w.prev[0] + w.prev[1] + w.prev[2];
     transmittance = tm_transported_transmittance(w.at, transmittance);
+    transmitted_alpha = TRANSMITS != 0u
+        ? tm_transmitted_alpha(w.g_t0i, SPECIALIZED ? LAYER_COUNT : tm_layer_count())
+        : 0.0;
     return w.lobe_count;
 }
 

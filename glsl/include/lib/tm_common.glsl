@@ -304,6 +304,15 @@ vec3 tm_transported_transmittance(TmTransportAt at, vec3 t) {
     return t * tm_transport_ratio(LAMINA_MAX_LAYERS_LIMIT, at);
 }
 
+// The roughness of the lobe a stack of `count` layers transmits, under the thin-slab
+// assumption of the forward pass (TRANSMITS): the primary path's asymmetry in the base
+// (§4.4's first-order g_t0, `g_t0`) refracted back out through the base's back face, parallel
+// to the stack, into the outside medium (src/model/mod.rs's transmitted_alpha).
+float tm_transmitted_alpha(float g_t0, uint count) {
+    float eta = tm_mean(tm_layer(count - 1u).ior.rgb) / IOR_AIR;
+    return hg_alpha_of_g(hg_refract(g_t0, eta));
+}
+
 bool tm_bit(uint mask, uint i) {
     return ((mask >> i) & 1u) != 0u;
 }

@@ -1,5 +1,5 @@
 // Specialization constants of the shading passes. Mirrors `ShadeSpec` in
-// src/variant.rs (ids 0…21 and order, the values from id 32 in generated/layer_values.glsl);
+// src/variant.rs (ids 0…22 and order, the values from id 32 in generated/layer_values.glsl);
 // the codes follow the value tables there.
 #ifndef LAMINA_SHARED_VARIANT
 #define LAMINA_SHARED_VARIANT
@@ -42,6 +42,9 @@ layout(constant_id = 20) const uint LIGHTS = 0;
 // TRANSPORT_PAPER or TRANSPORT_CORRECTED: under `corrected` each layer's lobes are scaled by
 // the material's energy ratios (material.transport, src/model/transport.rs).
 layout(constant_id = 21) const uint TRANSPORT = 0;
+// 1: the stack may end in a dielectric (neither a conductor nor a diffuse base) and transmits:
+// the forward pass shades what it transmits from behind the surface; 0 folds that code away.
+layout(constant_id = 22) const uint TRANSMITS = 0;
 
 // The codes of every axis value (MODEL_TM2, TIR_LUT32, FGD_RESAMPLED4D, G2_EARL, …), written
 // from the Rust value tables by src/shader/compiler.rs.
