@@ -15,6 +15,7 @@ mod diff;
 mod eval;
 mod export;
 mod furnace;
+mod merge;
 mod reference;
 mod render;
 mod report;
@@ -93,6 +94,9 @@ enum Command {
     Sweep(sweep::SweepArgs),
     /// Write profiling/REPORT.md from sweep results, beside the talk's published figures.
     Report(report::ReportArgs),
+    /// Join the shards of a sweep (`sweep --shard K/N`, run on many machines) into one results
+    /// directory and its report.
+    Merge(merge::MergeArgs),
     /// Compare two sets of results (commits, drivers, devices): time as each run's ratio to its
     /// ggx baseline, JIT instruction counts as they are.
     Diff(diff::DiffArgs),
@@ -126,6 +130,7 @@ pub fn run(cli: &Cli) -> Result<()> {
         Command::Bench(args) => bench::run(global, args),
         Command::Sweep(args) => sweep::run(global, args),
         Command::Report(args) => report::run(args),
+        Command::Merge(args) => merge::run(args),
         Command::Diff(args) => diff::run(args),
         Command::Tables(args) => tables::run(global, args),
         Command::CountWorker(args) => count_worker::run(global, args),

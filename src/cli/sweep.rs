@@ -8,7 +8,7 @@ use indicatif::ProgressBar;
 use lamina::imageio;
 use lamina::profile::counter::CounterSetup;
 use lamina::study::run::{run_suite, Event, SuiteRun};
-use lamina::study::{self, report};
+use lamina::study::{self, report, shard};
 
 use super::args::{CounterArg, EnvArg};
 use super::{asset_path, progress_bar, studies, GlobalArgs};
@@ -31,12 +31,20 @@ pub struct SweepArgs {
     /// Check and expand the file, print the cases, and stop before any GPU work.
     #[arg(long)]
     dry_run: bool,
+    /// Run shard K of N (1 ≤ K ≤ N): every N-th point of each study from the K-th, the ggx
+    /// baselines they need, every N-th reference material; the output is a complete results
+    /// directory that `lamina merge` joins with the other shards'.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<shard::Shard>,
 }
 
 pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
     let (mut list, suite) = study::load(&args.file)?;
     if !args.study.is_empty() {
         select_studies(&args.file, &mut list, &args.study)?;
+    }
+    if let Some(s) = args.shard {
+        list.iter_mut().for_each(|study| shard::apply(study, s));
     }
     match args.counter {
         Some(CounterArg::Instructions) => {
@@ -179,8 +187,11 @@ fn select_studies(file: &Path, list: &mut Vec<study::Study>, names: &[String]) -
 /// The studies and their cases, before anything runs.
 fn print_plan(args: &SweepArgs, list: &[study::Study], dir_of: &dyn Fn(&study::Study) -> PathBuf) {
     let cases: usize = list.iter().map(|s| s.points.len()).sum();
+    let share = args.shard.map_or(String::new(), |s| {
+        format!(" in shard {}/{}", s.index, s.count)
+    });
     println!(
-        "{}: {}, {cases} case(s) (+ ggx baselines)",
+        "{}: {}, {cases} case(s){share} (+ ggx baselines)",
         args.file.display(),
         studies(list.len())
     );

@@ -199,7 +199,7 @@ impl References {
 
 /// Offset of the run index under which a half-precision run's error map against its fp32
 /// twin travels with the others ([`error_map_path`]).
-const FP32_MAPS: usize = 1 << 20;
+pub const FP32_MAPS: usize = 1 << 20;
 
 /// Where a run's error map goes in its study's directory: against the reference, or (for a
 /// half-precision run's map against its fp32 twin, index offset by [`FP32_MAPS`]) against it.

@@ -17,7 +17,7 @@ use crate::variant::{Model, VariantKey};
 /// [`Run::executable_stats`] of a device without `VK_KHR_pipeline_executable_properties`.
 pub const UNSUPPORTED: &str = "unsupported";
 
-#[derive(Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct DeviceInfo {
     pub name: String,
     pub driver: String,
@@ -29,7 +29,7 @@ pub struct DeviceInfo {
     pub subgroup_size: Option<u32>,
 }
 
-#[derive(Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Run {
     pub variant: VariantKey,
     pub material: String,
@@ -138,7 +138,7 @@ impl ActiveLayers {
     }
 }
 
-#[derive(Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Results {
     pub device: DeviceInfo,
     pub git_rev: String,

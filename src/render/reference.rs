@@ -98,31 +98,17 @@ pub fn lobe_table(model: Model, layers: &[LayerParams]) -> Result<BakedTable> {
         .map(|t| {
             let (slot, j) = (t / size as usize, t % size as usize);
             let e = &evaluations[j];
-            let (lobe, behind) = match kept.get(slot) {
-                Some(&k) => (e.lobes[k], 0.0),
-                None => (
-                    Lobe {
+            match kept.get(slot) {
+                Some(&k) => table_rows(e.lobes[k], sample_cos(j as u32, size), 0.0),
+                None => {
+                    let through = Lobe {
                         weight: e.transmittance,
                         roughness: e.transmitted_roughness,
                         diffuse: false,
-                    },
-                    1.0,
-                ),
-            };
-            let w = lobe.weight;
-            if lobe.diffuse {
-                return [
-                    [w[0] as f32, w[1] as f32, w[2] as f32, -1.0],
-                    [1.0, 0.0, 0.0, 0.0],
-                ];
+                    };
+                    table_rows(through, sample_cos(j as u32, size), 1.0)
+                }
             }
-            let alpha = lobe.roughness.max(MIN_ALPHA);
-            let white = lobe_albedo(G2_FORM, sample_cos(j as u32, size), alpha);
-            let w = w.map(|w| (w / white) as f32);
-            [
-                [w[0], w[1], w[2], alpha.sqrt() as f32],
-                [white as f32, behind, 0.0, 0.0],
-            ]
         })
         .collect();
     // Lobe k's first row, then its second.
@@ -140,6 +126,25 @@ pub fn lobe_table(model: Model, layers: &[LayerParams]) -> Result<BakedTable> {
         texels,
         kept,
     })
+}
+
+/// A lobe's two rows at view cosine `mu` (`behind`: 1 for the transmitted lobe): (weight / E,
+/// √α) and (E, behind, 0, 0), √α = −1 and E = 1 for a diffuse base's lobe.
+fn table_rows(lobe: Lobe, mu: f64, behind: f32) -> [[f32; 4]; 2] {
+    let w = lobe.weight;
+    if lobe.diffuse {
+        return [
+            [w[0] as f32, w[1] as f32, w[2] as f32, -1.0],
+            [1.0, 0.0, 0.0, 0.0],
+        ];
+    }
+    let alpha = lobe.roughness.max(MIN_ALPHA);
+    let white = lobe_albedo(G2_FORM, mu, alpha);
+    let w = w.map(|w| (w / white) as f32);
+    [
+        [w[0], w[1], w[2], alpha.sqrt() as f32],
+        [white as f32, behind, 0.0, 0.0],
+    ]
 }
 
 /// A converged reference image.

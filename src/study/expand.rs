@@ -181,6 +181,7 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
         bake_error,
         reference,
         image_error_spp,
+        shard: None,
     })
 }
 

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::reference::compare::MaterialReference;
 use crate::variant::VariantKey;
 
+use super::shard::ShardMeta;
 use super::{Published, Study, Target};
 
 /// A study's `study.json`.
@@ -35,6 +36,9 @@ pub struct StudyMeta {
     /// A `[reference]` study's comparisons, one per material.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub reference: Vec<MaterialReference>,
+    /// A shard's place in the whole study (`lamina sweep --shard`); absent from a whole run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<ShardMeta>,
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -93,6 +97,7 @@ impl StudyMeta {
             targets: study.targets.clone(),
             bake_error,
             reference,
+            shard: study.shard.clone(),
         }
     }
 }

@@ -17,6 +17,7 @@ pub mod meta;
 mod reference;
 pub mod report;
 pub mod run;
+pub mod shard;
 pub mod write;
 
 use std::path::{Path, PathBuf};
@@ -65,6 +66,8 @@ pub struct Study {
     pub reference: Option<ReferenceStudy>,
     /// `reference_spp`: image errors against reference images of this many samples per lobe.
     pub image_error_spp: Option<u32>,
+    /// `--shard K/N`: the share of the whole study this one runs ([`shard::apply`]).
+    pub shard: Option<shard::ShardMeta>,
 }
 
 impl Study {

@@ -323,7 +323,7 @@ pub fn run_suite(
         let error_maps = std::mem::take(&mut timed.error_maps);
         let (results, meta) = finish(study, timed, run.counter.is_some());
         let dir = output_dir(run.out, study, run.suite);
-        let charts = super::write::write(&dir, study, &results, &meta, &error_maps)?;
+        let charts = super::write::write(&dir, &study.source_text, &results, &meta, &error_maps)?;
         on(Event::Written {
             study,
             results: &results,

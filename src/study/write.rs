@@ -12,12 +12,12 @@ use super::charts::{
     charts_of, pareto_charts, reference_chart, reference_chart_stem, reference_distribution_chart,
 };
 use super::meta::StudyMeta;
-use super::Study;
 
-/// Writes the study's files into `dir`; returns the chart paths (PNG).
+/// Writes the study's files into `dir` (`sweep_text`: the study's file as run); returns the
+/// chart paths (PNG).
 pub fn write(
     dir: &Path,
-    study: &Study,
+    sweep_text: &str,
     results: &Results,
     meta: &StudyMeta,
     error_maps: &[(usize, ErrorMap)],
@@ -31,7 +31,7 @@ pub fn write(
     write_file_atomically(&dir.join("results.json"), &results_json)?;
     write_file_atomically(&dir.join("results.csv"), results.csv())?;
     write_file_atomically(&dir.join("study.json"), &meta_json)?;
-    write_file_atomically(&dir.join("sweep.toml"), &study.source_text)?;
+    write_file_atomically(&dir.join("sweep.toml"), sweep_text)?;
     let mut charts = Vec::new();
     for (stem, chart) in charts_of(results, meta) {
         let path = dir.join(stem);

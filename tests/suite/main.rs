@@ -19,6 +19,7 @@ mod pipeline_cache;
 mod reference;
 mod reflection;
 mod render;
+mod shard;
 mod spec_array;
 mod specialized;
 mod structure;

@@ -8,6 +8,7 @@
 //! counter sizes, free of per-draw costs) where a study has them; the whole draw's count is the
 //! secondary column, and the only one of studies counted at a single size.
 
+mod devices;
 mod ratios;
 mod reading;
 mod runs;
@@ -91,6 +92,7 @@ pub fn render(studies: &[StudyDir], out: &Path) -> String {
     md += "\n";
     summary_section(&mut md, studies);
     targets_summary(&mut md, studies);
+    devices::devices_section(&mut md, studies);
     for s in studies {
         study_section(&mut md, s, out_dir);
     }

@@ -113,6 +113,7 @@ fn the_reading_names_agreement_rebuilds_and_fp16_emulation() {
             targets: Vec::new(),
             bake_error: Vec::new(),
             reference: Vec::new(),
+            shard: None,
         },
     };
     let lines = reading(&study);
@@ -211,6 +212,7 @@ fn per_pixel_counts_are_the_main_figure() {
             targets: Vec::new(),
             bake_error: Vec::new(),
             reference: Vec::new(),
+            shard: None,
         },
     };
     let md = render(std::slice::from_ref(&study), Path::new("REPORT.md"));
@@ -330,6 +332,7 @@ fn targets_pivot_dilution_and_bake_error_are_reported() {
                 ],
             }],
             reference: Vec::new(),
+            shard: None,
         },
     };
     let md = render(std::slice::from_ref(&study), Path::new("REPORT.md"));
@@ -456,4 +459,62 @@ fn a_verdict_agrees_with_the_figure_it_prints() {
         target_verdict(1.05, time, &bound(1.0, Some(0.02))).1,
         "missed by 5 %"
     );
+}
+
+#[test]
+fn a_study_on_two_devices_gets_a_table_of_both_ratios() {
+    let key = |k: &str| k.parse::<VariantKey>().unwrap().to_string();
+    let on = |device: &str, ratio: f64| {
+        let mut tm2 = run(&key("model=tm2"), 2.0, 0, 0);
+        tm2.ratio_to_baseline = ratio;
+        StudyDir {
+            dir: PathBuf::from(device),
+            results: Results {
+                device: DeviceInfo {
+                    name: device.into(),
+                    driver: "d".into(),
+                    api_version: "1.3".into(),
+                    vendor_id: 0,
+                    subgroup_size: None,
+                },
+                git_rev: "0".into(),
+                command: "c".into(),
+                size: [8, 8],
+                lp_num_threads: None,
+                scene: crate::render::scene::Scene::FullScreen,
+                counter: None,
+                lighting: None,
+                runs: vec![run(&key("model=ggx"), 1.0, 0, 0), tm2],
+            },
+            meta: StudyMeta {
+                name: "n".into(),
+                title: "T".into(),
+                description: String::new(),
+                sweep_file: "s".into(),
+                axes: vec!["model".into()],
+                points: vec![PointMeta {
+                    run: 1,
+                    coords: vec!["tm2".into()],
+                }],
+                skipped: Vec::new(),
+                published: Vec::new(),
+                fit: false,
+                counter_size: None,
+                counter_sizes: None,
+                targets: Vec::new(),
+                bake_error: Vec::new(),
+                reference: Vec::new(),
+                shard: None,
+            },
+        }
+    };
+    let md = render(&[on("lavapipe", 2.5), on("H100", 21.75)], Path::new("R.md"));
+    assert!(md.contains("## Across devices"), "{md}");
+    assert!(
+        md.contains("| model | material | lavapipe | H100 |"),
+        "{md}"
+    );
+    assert!(md.contains("| tm2 | gold | 2.50× | 21.75× |"), "{md}");
+    let alone = render(&[on("lavapipe", 2.5)], Path::new("R.md"));
+    assert!(!alone.contains("## Across devices"), "one device: no table");
 }
