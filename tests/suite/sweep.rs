@@ -5,9 +5,9 @@ use crate::common;
 use std::process::Command;
 
 use common::{lamina, text};
+use lamina::material::presets;
 use lamina::profile::counter::CounterSizes;
 use lamina::render::scene::Scene;
-use lamina::material::presets;
 use lamina::study;
 
 const SMALL: &str = r#"
