@@ -200,7 +200,8 @@ vec3 shade_baked(vec3 n, vec3 v, float n_dot_v) {
 // integrated by Monte Carlo against the unfiltered environment (the cube's level 0) and the
 // lights (a disk light over its disk): REFERENCE_SAMPLES iterations per lobe per frame, each
 // one direction through the lobe and one from the environment's importance sampling
-// (reference_environment), seeded by the pixel and the frame (frame.params.z); the host
+// (reference_environment), seeded by the pixel, the frame (frame.params.z) and the seed's
+// stream (frame.params.w's bits, render::reference::stream); the host
 // averages the frames. No split sum, no
 // prefiltering, no FGD table.
 const uint REFERENCE_SAMPLES = 16u;
@@ -412,7 +413,8 @@ void main() {
     vec3 radiance;
 #ifdef LAMINA_REFERENCE
     reference_state = reference_hash(uint(gl_FragCoord.x)
-        ^ reference_hash(uint(gl_FragCoord.y) ^ reference_hash(uint(frame.params.z))));
+        ^ reference_hash(uint(gl_FragCoord.y)
+        ^ reference_hash(uint(frame.params.z) ^ floatBitsToUint(frame.params.w))));
     radiance = shade_reference(n, v, n_dot_v);
 #else
     if (MODEL == MODEL_GGX) {

@@ -48,6 +48,15 @@ pub struct BenchArgs {
     /// largest relative error in the table, JSON and CSV.
     #[arg(long, value_name = "N")]
     reference_spp: Option<u32>,
+    /// With --reference-spp: the reference's seed (any u64). Its noise floor, the FLIP between
+    /// it and the reference from the next seed, is printed beside each image error.
+    #[arg(
+        long,
+        value_name = "SEED",
+        default_value_t = 0,
+        requires = "reference_spp"
+    )]
+    seed: u64,
     /// With --reference-spp: write each run's FLIP error map under this directory
     /// (error-maps/run-N.png, N the run's row in the JSON).
     #[arg(long, value_name = "DIR", requires = "reference_spp")]
@@ -96,7 +105,12 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
         lighting: args.env.lights.lighting()?,
     };
     if let Some(spp) = args.reference_spp {
-        reference::Convergence { spp, noise: None }.check()?;
+        reference::Convergence {
+            spp,
+            noise: None,
+            seed: args.seed,
+        }
+        .check()?;
     }
     let bar = progress_bar("frames");
     print_pipelines(&mut gpu, Some(&bar));
@@ -112,8 +126,11 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
     print!("{}", results.table());
     for run in &results.runs {
         if let Some(e) = run.image_error {
+            let floor = run
+                .reference_flip_floor
+                .map_or(String::new(), |f| format!(" (noise floor {f:.4})"));
             println!(
-                "image error: FLIP {:.4}, RMSE {:.2e}, max relative {:.1} %  {} | {}",
+                "image error: FLIP {:.4}{floor}, RMSE {:.2e}, max relative {:.1} %  {} | {}",
                 e.flip,
                 e.rmse,
                 100.0 * e.max_relative,
@@ -149,7 +166,7 @@ fn image_errors(
         gpu,
         equirect,
         config,
-        spp,
+        (spp, args.seed),
         &mut References::default(),
         &mut |what, done, total| {
             bar.set_message(what.to_owned());

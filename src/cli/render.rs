@@ -45,6 +45,10 @@ pub struct RenderArgs {
     /// over mean radiance) is at most this, e.g. 0.005.
     #[arg(long, value_name = "X", requires = "reference")]
     noise: Option<f64>,
+    /// With --reference: the samples' seed (any u64); two seeds give two independent
+    /// estimates of the same image, whose difference is its noise.
+    #[arg(long, value_name = "SEED", default_value_t = 0, requires = "reference")]
+    seed: u64,
 }
 
 pub struct RenderScene;
@@ -149,6 +153,7 @@ fn run_reference(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
     let convergence = reference::Convergence {
         spp: args.spp,
         noise: args.noise,
+        seed: args.seed,
     };
     convergence.check()?;
     let env_path = asset_path(&scene.env);
@@ -209,8 +214,8 @@ fn run_reference(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
     );
     println!("size:        {width}x{height}");
     println!(
-        "reference:   {} samples per lobe and pixel, relative noise {:.2e}",
-        image.spp, image.noise
+        "reference:   {} samples per lobe and pixel from seed {}, relative noise {:.2e}",
+        image.spp, args.seed, image.noise
     );
     println!(
         "wrote:       {}, {}",

@@ -142,6 +142,7 @@ fn timed_run(case: &Case, t: &CaseTiming, baseline: f64, config: &BenchConfig) -
             .flatten(),
         image_error: None,
         reference_noise: None,
+        reference_flip_floor: None,
         image_error_vs_fp32: None,
     }
 }

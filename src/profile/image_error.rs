@@ -87,16 +87,17 @@ pub fn compare(
 }
 
 /// Renders each uniform material's reference image (`config`'s scene, size and lighting, `spp`
-/// samples per lobe) and one frame of each case of `config`'s plan, in float targets, and
-/// measures each case's image error and, for a half-precision case, its error against its
-/// single-precision twin: one [`CaseImageError`] per case, in plan order, and the error maps
-/// by case ([`error_map_path`]). Cases of a stack that varies over the surface get none (the
-/// reference renders uniform stacks).
+/// samples per lobe, from `seed`) and one frame of each case of `config`'s plan, in float
+/// targets, and measures each case's image error — beside the reference's noise floor, the
+/// FLIP between it and the same reference from the next seed — and, for a half-precision
+/// case, its error against its single-precision twin: one [`CaseImageError`] per case, in plan
+/// order, and the error maps by case ([`error_map_path`]). Cases of a stack that varies over
+/// the surface get none (the reference renders uniform stacks).
 pub fn measure(
     gpu: &Gpu,
     equirect: &HdrImage,
     config: &BenchConfig,
-    spp: u32,
+    (spp, seed): (u32, u64),
     references: &mut References,
     progress: &mut impl FnMut(&str, usize, usize),
 ) -> Result<(Vec<CaseImageError>, ErrorMaps)> {
@@ -125,26 +126,38 @@ pub fn measure(
             size: (width, height),
             lighting: config.lighting.clone(),
             spp,
+            seed,
         };
         if references.find(&key).is_none() {
-            let image = reference::render(
-                &mut renderer,
-                case.stack.model,
-                &layers,
-                (width, height),
-                Convergence { spp, noise: None },
-                &mut |_, _| {},
-                &never,
-            )?
-            .expect("an image-error reference is never stopped");
-            references.images.push((key.clone(), image));
+            let mut render = |seed| {
+                let convergence = Convergence {
+                    spp,
+                    noise: None,
+                    seed,
+                };
+                reference::render(
+                    &mut renderer,
+                    case.stack.model,
+                    &layers,
+                    (width, height),
+                    convergence,
+                    &mut |_, _| {},
+                    &never,
+                )
+                .map(|image| image.expect("an image-error reference is never stopped"))
+            };
+            let image = render(seed)?;
+            let other = render(seed.wrapping_add(1))?;
+            let floor = compare(&other.pixels, &image.pixels, width, height).0.flip;
+            references.images.push((key.clone(), image, floor));
         }
-        let image = references.find(&key).expect("rendered above");
+        let (image, floor) = references.find(&key).expect("rendered above");
         let pass = passes.get(&mut renderer, &case.pass_key(&config.lighting)?)?;
         let frame = renderer.render(pass, &layers, width, height)?;
         let (error, map) = compare(&frame.pixels, &image.pixels, width, height);
         errors[i].error = Some(error);
         errors[i].reference_noise = Some(image.noise);
+        errors[i].flip_floor = Some(floor);
         maps.push((i, map));
         frames[i] = Some(frame.pixels);
     }
@@ -172,7 +185,7 @@ pub fn measure(
 }
 
 /// What a reference image depends on, under one environment: the stack in its model, the
-/// scene and size, the lighting and the samples.
+/// scene and size, the lighting, the samples and their seed.
 #[derive(Clone, PartialEq)]
 struct ReferenceKey {
     model: Model,
@@ -181,19 +194,24 @@ struct ReferenceKey {
     size: (u32, u32),
     lighting: Lighting,
     spp: u32,
+    seed: u64,
 }
 
-/// The reference images rendered so far under one environment, kept across the measurements
-/// of a run: a suite's studies of one material at one size share its reference, rendered once
-/// (it is seeded by its frames, so a second render would be the same image).
+/// The reference images rendered so far under one environment, each with its noise floor,
+/// kept across the measurements of a run: a suite's studies of one material at one size share
+/// its reference, rendered once (it is seeded by its seed and frames, so a second render would
+/// be the same image).
 #[derive(Default)]
 pub struct References {
-    images: Vec<(ReferenceKey, ReferenceImage)>,
+    images: Vec<(ReferenceKey, ReferenceImage, f64)>,
 }
 
 impl References {
-    fn find(&self, key: &ReferenceKey) -> Option<&ReferenceImage> {
-        self.images.iter().find(|(k, _)| k == key).map(|(_, i)| i)
+    fn find(&self, key: &ReferenceKey) -> Option<(&ReferenceImage, f64)> {
+        self.images
+            .iter()
+            .find(|(k, ..)| k == key)
+            .map(|(_, i, floor)| (i, *floor))
     }
 }
 

@@ -87,6 +87,10 @@ pub struct Run {
     /// That reference's relative noise (`render::reference::ReferenceImage::noise`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reference_noise: Option<f64>,
+    /// The reference's noise floor: FLIP between it and the same reference from the next seed
+    /// (`profile::image_error::measure`). An image error below it is not resolved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_flip_floor: Option<f64>,
     /// A half-precision run's image against that of the same variant in single precision:
     /// what fp16 alone changes (its banding, as a number).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -193,6 +197,7 @@ pub struct Counts {
 pub struct CaseImageError {
     pub error: Option<ImageError>,
     pub reference_noise: Option<f64>,
+    pub flip_floor: Option<f64>,
     pub vs_fp32: Option<ImageError>,
 }
 
@@ -214,6 +219,7 @@ impl Results {
         for (run, e) in self.runs.iter_mut().zip(errors) {
             run.image_error = e.error;
             run.reference_noise = e.reference_noise;
+            run.reference_flip_floor = e.flip_floor;
             run.image_error_vs_fp32 = e.vs_fp32;
         }
     }

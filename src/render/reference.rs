@@ -163,7 +163,7 @@ pub struct ReferenceImage {
     pub noise: f64,
 }
 
-/// When a reference stops.
+/// When a reference stops, and which samples it draws.
 #[derive(Clone, Copy, Debug)]
 pub struct Convergence {
     /// Samples per lobe per pixel at most (rounded up to whole frames).
@@ -171,6 +171,23 @@ pub struct Convergence {
     /// Stop earlier once [`ReferenceImage::noise`] is at most this (checked from the fourth
     /// frame on).
     pub noise: Option<f64>,
+    /// The samples' seed: any u64 ([`stream`]); two seeds give two independent estimates of
+    /// the same image, whose difference is the reference's noise.
+    pub seed: u64,
+}
+
+/// The pass's 32-bit sample stream for `seed` (`Renderer::seed`, mixed into every frame's
+/// hash): 0 for seed 0 — the images of earlier references — else SplitMix64's finaliser of
+/// the seed, folded to 32 bits.
+pub fn stream(seed: u64) -> u32 {
+    if seed == 0 {
+        return 0;
+    }
+    let mut z = seed.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^= z >> 31;
+    ((z ^ (z >> 32)) as u32).max(1)
 }
 
 impl Convergence {
@@ -280,6 +297,7 @@ pub fn render(
     let pass = renderer.prepare_reference(model, layers, table)?;
     let frames = convergence.spp.div_ceil(SAMPLES_PER_FRAME);
     let mut accumulator = Accumulator::new((width * height) as usize);
+    renderer.seed = stream(convergence.seed);
     for f in 0..frames {
         if stop.load(Ordering::Relaxed) {
             return Ok(None);
@@ -312,4 +330,19 @@ pub fn render(
         spp: accumulator.frames * SAMPLES_PER_FRAME,
         noise,
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::stream;
+
+    #[test]
+    fn seed_zero_keeps_the_earlier_images_and_other_seeds_get_streams_of_their_own() {
+        assert_eq!(stream(0), 0);
+        let mut seen: Vec<u32> = (1..10_000u64).chain([u64::MAX]).map(stream).collect();
+        assert!(seen.iter().all(|&s| s != 0));
+        seen.sort_unstable();
+        seen.dedup();
+        assert_eq!(seen.len(), 10_000, "distinct streams");
+    }
 }

@@ -91,6 +91,9 @@ pub struct Renderer<'g> {
     pub lighting: Lighting,
     /// The frame's index, which seeds a reference pass's samples (`render::reference`).
     pub frame_index: u32,
+    /// The reference pass's sample stream (`render::reference::stream`), mixed into every
+    /// frame's seed; 0 by default.
+    pub seed: u32,
     /// The maps of every spatially varying stack set so far ([`Renderer::set_surface`]), and
     /// the one frames are rendered with (`None`: uniform stacks).
     surfaces: Vec<SurfaceTexture>,
@@ -162,6 +165,7 @@ impl<'g> Renderer<'g> {
             camera: Camera::default(),
             lighting: Lighting::default(),
             frame_index: 0,
+            seed: 0,
             surfaces: Vec::new(),
             current_surface: None,
             corrections: RefCell::new(Vec::new()),
@@ -511,7 +515,7 @@ impl<'g> Renderer<'g> {
                 self.environment.desc.mip_count as f32,
                 self.lighting.environment as f32,
                 self.frame_index as f32,
-                0.0,
+                f32::from_bits(self.seed),
             ],
             irradiance: self.environment.irradiance,
         };

@@ -339,6 +339,7 @@ mod tests {
             active_layers: None,
             image_error: None,
             reference_noise: None,
+            reference_flip_floor: None,
             image_error_vs_fp32: None,
         }
     }

@@ -69,7 +69,7 @@ pub fn time(
     let error_maps = match study.image_error_spp {
         Some(spp) => {
             let (errors, maps) =
-                image_error::measure(gpu, equirect, &config, spp, references, progress)?;
+                image_error::measure(gpu, equirect, &config, (spp, 0), references, progress)?;
             results.record_image_errors(&errors);
             maps
         }

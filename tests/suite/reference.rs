@@ -212,6 +212,7 @@ fn the_reference_image_of_a_white_furnace_is_the_model_reflectance() {
             Convergence {
                 spp: 256,
                 noise: None,
+                seed: 0,
             },
             &mut |_, _| {},
             &AtomicBool::new(false),
@@ -326,6 +327,7 @@ fn the_reference_lights_meet_the_real_time_light_term() {
             Convergence {
                 spp: 64,
                 noise: None,
+                seed: 0,
             },
             &mut |_, _| {},
             &AtomicBool::new(false),
@@ -351,6 +353,100 @@ fn the_reference_lights_meet_the_real_time_light_term() {
         println!("{material}: worst |reference − real time| {worst:.2e} of the peak");
     }
     common::assert_validation_clean(&gpu);
+}
+
+/// `render --reference --seed`: a seed draws its own samples — the same seed the same image
+/// to the bit, another seed another estimate of it, within the two images' standard errors of
+/// each other — and the CLI prints it.
+#[test]
+fn two_seeds_give_two_estimates_of_one_image() {
+    use lamina::render::reference::{self, Convergence};
+    use lamina::render::{Renderer, TargetFormat};
+    use lamina::tables::environment::EnvDesc;
+    use std::sync::atomic::AtomicBool;
+
+    let gpu = common::gpu();
+    let env = common::studio();
+    let stack = lamina::material::Stack::resolve("varnished-gold").unwrap();
+    let layers = stack.params();
+    let mut renderer =
+        Renderer::with_target(&gpu, &env, EnvDesc::default(), TargetFormat::Float).unwrap();
+    let size = 32;
+    let mut render = |seed| {
+        let convergence = Convergence {
+            spp: 32,
+            noise: None,
+            seed,
+        };
+        reference::render(
+            &mut renderer,
+            stack.model,
+            &layers,
+            (size, size),
+            convergence,
+            &mut |_, _| {},
+            &AtomicBool::new(false),
+        )
+        .unwrap()
+        .unwrap()
+    };
+    let (a, again, b) = (render(u64::MAX), render(u64::MAX), render(7));
+    assert_eq!(a.pixels, again.pixels, "one seed, one image");
+    assert_ne!(a.pixels, b.pixels, "another seed, other samples");
+    let mean = |p: &[f32; 4]| (f64::from(p[0]) + f64::from(p[1]) + f64::from(p[2])) / 3.0;
+    let n = a.pixels.len() as f64;
+    let difference = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(p, q)| mean(p) - mean(q))
+        .sum::<f64>()
+        / n;
+    let error = a
+        .std_error
+        .iter()
+        .chain(&b.std_error)
+        .map(|e| f64::from(*e).powi(2))
+        .sum::<f64>()
+        .sqrt()
+        / n;
+    assert!(
+        difference.abs() < 5.0 * error,
+        "mean radiance differs by {difference:.3e}, 5 standard errors {:.3e}",
+        5.0 * error
+    );
+    common::assert_validation_clean(&gpu);
+
+    let dir = common::scratch_dir("reference-seed");
+    let out = lamina(
+        &[
+            "render",
+            "--reference",
+            "--material",
+            "gold",
+            "--size",
+            "16x16",
+            "--spp",
+            "16",
+            "--seed",
+            "18446744073709551615",
+            "--out",
+            "r.exr",
+            "--png",
+            "r.png",
+        ],
+        &dir,
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("from seed 18446744073709551615"),
+        "{stdout}"
+    );
 }
 
 /// `transport=corrected` against the committed reference study (both truths, every preset at

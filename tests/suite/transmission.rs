@@ -128,6 +128,7 @@ fn a_smooth_slab_shows_the_environment_behind_it() {
             Convergence {
                 spp: 32,
                 noise: None,
+                seed: 0,
             },
             &mut |_, _| {},
             &AtomicBool::new(false),

@@ -167,9 +167,11 @@ pub(super) fn image_error_section(md: &mut String, s: &StudyDir, out_dir: &Path)
         md,
         "Image error against the reference image of the same material and scene (`lamina \
          render --reference`: the exact model's lobes integrated by Monte Carlo, no split sum, \
-         no prefiltering, no FGD table; relative noise at most {noise:.1e}): mean FLIP, RMSE and \
-         the largest relative error of the radiance (`profile::image_error`). A run is on the \
-         Pareto front when no run of its material is both cheaper ({}) and closer.\n",
+         no prefiltering, no FGD table; relative noise at most {noise:.1e}): mean FLIP (in \
+         parentheses, where measured, the reference's noise floor: the FLIP between it and the \
+         same reference from the next seed), RMSE and the largest relative error of the \
+         radiance (`profile::image_error`). A run is on the Pareto front when no run of its \
+         material is both cheaper ({}) and closer.\n",
         if counted {
             "JIT instructions per pixel"
         } else {
@@ -202,9 +204,12 @@ pub(super) fn image_error_section(md: &mut String, s: &StudyDir, out_dir: &Path)
             dominated.push(format!("{name} ({})", run.material));
         }
         let map = s.dir.join(error_map_path(i));
+        let floor = run
+            .reference_flip_floor
+            .map_or(String::new(), |f| format!(" ({f:.4})"));
         let _ = writeln!(
             md,
-            "| {name} | {} | {:.4} | {:.2e} | {:.1} % | {cost} | {} | [map]({}) |",
+            "| {name} | {} | {:.4}{floor} | {:.2e} | {:.1} % | {cost} | {} | [map]({}) |",
             run.material,
             e.flip,
             e.rmse,

@@ -46,6 +46,7 @@ fn run(variant: &str, ms: f64, jit: u64, total: u64) -> Run {
         active_layers: None,
         image_error: None,
         reference_noise: None,
+        reference_flip_floor: None,
         image_error_vs_fp32: None,
     }
 }
