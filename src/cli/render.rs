@@ -212,9 +212,9 @@ fn run_reference(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
         stack.model,
         stack.layers.len()
     );
-    println!("size:        {width}x{height}");
     println!(
-        "reference:   {} samples per lobe and pixel from seed {}, relative noise {:.2e}",
+        "size:        {width}x{height}\nreference:   {} samples per lobe and pixel from seed {}, \
+         relative noise {:.2e}",
         image.spp, args.seed, image.noise
     );
     println!(

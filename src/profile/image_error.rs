@@ -129,26 +129,7 @@ pub fn measure(
             seed,
         };
         if references.find(&key).is_none() {
-            let mut render = |seed| {
-                let convergence = Convergence {
-                    spp,
-                    noise: None,
-                    seed,
-                };
-                reference::render(
-                    &mut renderer,
-                    case.stack.model,
-                    &layers,
-                    (width, height),
-                    convergence,
-                    &mut |_, _| {},
-                    &never,
-                )
-                .map(|image| image.expect("an image-error reference is never stopped"))
-            };
-            let image = render(seed)?;
-            let other = render(seed.wrapping_add(1))?;
-            let floor = compare(&other.pixels, &image.pixels, width, height).0.flip;
+            let (image, floor) = reference_with_floor(&mut renderer, &key, &never)?;
             references.images.push((key.clone(), image, floor));
         }
         let (image, floor) = references.find(&key).expect("rendered above");
@@ -182,6 +163,37 @@ pub fn measure(
     }
     progress("image error", cases.len(), cases.len());
     Ok((errors, maps))
+}
+
+/// The reference image `key` names, and its noise floor: the FLIP between it and the same
+/// reference from the next seed.
+fn reference_with_floor(
+    renderer: &mut Renderer<'_>,
+    key: &ReferenceKey,
+    never: &AtomicBool,
+) -> Result<(ReferenceImage, f64)> {
+    let (width, height) = key.size;
+    let mut render = |seed| {
+        let convergence = Convergence {
+            spp: key.spp,
+            noise: None,
+            seed,
+        };
+        reference::render(
+            renderer,
+            key.model,
+            &key.layers,
+            key.size,
+            convergence,
+            &mut |_, _| {},
+            never,
+        )
+        .map(|image| image.expect("an image-error reference is never stopped"))
+    };
+    let image = render(key.seed)?;
+    let other = render(key.seed.wrapping_add(1))?;
+    let floor = compare(&other.pixels, &image.pixels, width, height).0.flip;
+    Ok((image, floor))
 }
 
 /// What a reference image depends on, under one environment: the stack in its model, the

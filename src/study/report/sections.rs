@@ -152,13 +152,11 @@ pub(super) fn bake_error_section(md: &mut String, s: &StudyDir, out_dir: &Path) 
 
 /// Each run's image against the reference image of its material and scene, its cost beside
 /// it, whether it is on its material's Pareto front, its error map; the Pareto charts.
-pub(super) fn image_error_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
-    let (r, m) = (&s.results, &s.meta);
-    let counted = r
-        .runs
-        .iter()
-        .any(|run| run.instructions_per_pixel.is_some());
-    let noise = r
+/// The image-error table's opening paragraph: what it compares, with the references' largest
+/// relative noise and the cost the Pareto front weighs (`counted`: JIT instructions).
+fn image_error_intro(md: &mut String, s: &StudyDir, counted: bool) {
+    let noise = s
+        .results
         .runs
         .iter()
         .filter_map(|run| run.reference_noise)
@@ -178,6 +176,15 @@ pub(super) fn image_error_section(md: &mut String, s: &StudyDir, out_dir: &Path)
             "median time"
         }
     );
+}
+
+pub(super) fn image_error_section(md: &mut String, s: &StudyDir, out_dir: &Path) {
+    let (r, m) = (&s.results, &s.meta);
+    let counted = r
+        .runs
+        .iter()
+        .any(|run| run.instructions_per_pixel.is_some());
+    image_error_intro(md, s, counted);
     let _ = writeln!(
         md,
         "| run | material | FLIP | RMSE | max rel. error | {} | Pareto | error map |",
