@@ -64,8 +64,9 @@ struct GlobalArgs {
 
 #[derive(Subcommand)]
 enum Command {
-    /// List Vulkan devices and the features lamina uses.
-    Devices,
+    /// List Vulkan devices and the features lamina uses; --calibrate times compute against
+    /// fragment shading on the selected one.
+    Devices(devices::DevicesArgs),
     /// Render the sphere under an environment to EXR and PNG, and print the GPU time.
     Render(render::RenderArgs),
     /// Evaluate a material's model at view cosines: total R, T and the lobes.
@@ -117,7 +118,7 @@ enum Command {
 pub fn run(cli: &Cli) -> Result<()> {
     let global = &cli.global;
     match &cli.command {
-        Command::Devices => devices::run(global),
+        Command::Devices(args) => devices::run(global, args),
         Command::Render(args) => render::run(global, args),
         Command::Eval(args) => eval::run(global, args),
         Command::Reference(args) => reference::run(args),

@@ -4,6 +4,7 @@
 //! and documents built on these measurements (`crate::study`).
 
 pub mod bench;
+pub mod calibrate;
 pub mod callgrind;
 pub mod count_worker;
 pub mod counter;

@@ -85,3 +85,55 @@ fn no_allocation_outlives_its_owner() {
     assert!(live.is_empty(), "still allocated: {live:?}");
     common::assert_validation_clean(&gpu);
 }
+
+/// `lamina devices --calibrate`: the same loop as a fragment draw and a compute dispatch over
+/// the same pixels, both timed; the dispatch runs one invocation per pixel and the draw at
+/// least one per pixel; the validation layer silent; bad sizes refused by name.
+#[test]
+fn the_calibration_pair_times_both_paths_over_the_same_pixels() {
+    use lamina::profile::calibrate::{calibrate, CalibrationSetup};
+
+    let gpu = common::gpu();
+    let setup = CalibrationSetup {
+        width: 64,
+        height: 32,
+        iterations: 64,
+        repeats: 3,
+    };
+    let c = calibrate(&gpu, setup).unwrap();
+    println!("{c:?}: compute/fragment {:.2}", c.compute_to_fragment());
+    assert!(c.fragment_ms > 0.0 && c.compute_ms > 0.0, "{c:?}");
+    assert!(c.compute_to_fragment().is_finite());
+    if let (Some(f), Some(k)) = (c.fragment_invocations, c.compute_invocations) {
+        assert_eq!(k, 64 * 32, "one compute invocation per pixel");
+        assert!(f >= 64 * 32, "a fragment per pixel at least, {f}");
+    }
+    common::assert_validation_clean(&gpu);
+
+    let dir = common::scratch_dir("calibrate");
+    let out = common::lamina(
+        &[
+            "--validation",
+            "devices",
+            "--calibrate",
+            "--size",
+            "32x16",
+            "--iterations",
+            "16",
+        ],
+        &dir,
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("compute/fragment:") && stdout.contains("32x16 pixels"),
+        "{stdout}"
+    );
+    let out = common::lamina(&["devices", "--calibrate", "--iterations", "0"], &dir);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--iterations"));
+}

@@ -18,6 +18,7 @@
 use std::collections::BTreeMap;
 use std::mem::{offset_of, size_of};
 
+use lamina::profile::calibrate;
 use lamina::render::eval;
 use lamina::shader::interface::{
     FrameConstants, LayerGpu, MaterialGpu, SCENE_BINDINGS, SCENE_SET, SHADING_BINDINGS,
@@ -272,6 +273,7 @@ fn kernels() -> Vec<KernelInterface> {
         fgd::PROBE_KERNEL,
         eval::KERNEL,
         kernel::SPEC_ARRAY,
+        calibrate::KERNEL,
     ]
 }
 
@@ -454,7 +456,20 @@ fn graphics_passes_declare_the_shading_and_scene_sets() {
                     .collect()
             };
             check_sets(&name, &spirv, &sets, &required);
-            assert!(spirv.push_struct().is_none(), "{name}: push constants");
+            // Only the calibration draw pushes constants, laid out as the host pushes them.
+            match spirv.push_struct() {
+                None => assert_ne!(entry, calibrate::ENTRIES[1], "{name}: no push constants"),
+                Some(block) => {
+                    assert_eq!(entry, calibrate::ENTRIES[1], "{name}: push constants");
+                    let offsets: Vec<u32> = spirv.members(block).iter().map(|m| m.offset).collect();
+                    let host: Vec<u32> = calibrate::FRAGMENT_PUSH
+                        .members
+                        .iter()
+                        .map(|m| m.offset)
+                        .collect();
+                    assert_eq!(offsets, host, "{name}: push members");
+                }
+            }
             for id in spirv.spec_ids() {
                 assert!(shade_ids.contains(&id), "{name}: spec constant {id} unset");
             }
