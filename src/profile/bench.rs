@@ -192,6 +192,7 @@ fn results(gpu: &Gpu, config: &BenchConfig, timings: Vec<CaseTiming>) -> Results
         scene: config.scene,
         counter: None,
         lighting: (config.lighting != Lighting::default()).then(|| config.lighting.to_toml()),
+        calibration: None,
         runs,
     }
 }

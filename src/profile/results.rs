@@ -159,6 +159,10 @@ pub struct Results {
     /// every result before lights.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lighting: Option<String>,
+    /// The device's calibration pair (`profile::calibrate`), measured by a sweep on a GPU so
+    /// that its report says what a fragment timing stands for there; absent on lavapipe.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<super::calibrate::Calibration>,
     pub runs: Vec<Run>,
 }
 

@@ -363,6 +363,7 @@ mod tests {
                 scene: crate::render::scene::Scene::FullScreen,
                 counter: None,
                 lighting: None,
+                calibration: None,
                 runs,
             },
         }

@@ -12,6 +12,7 @@ use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
 use crate::profile::bench::{self, BenchConfig};
+use crate::profile::calibrate::{calibrate, CalibrationSetup};
 use crate::profile::counter::{self, CounterSetup, Pool};
 use crate::profile::image_error::{self, ErrorMaps, References};
 use crate::profile::prebuild;
@@ -314,11 +315,22 @@ pub fn run_suite(
         });
         Ok((timed, counts))
     })?;
+    // On a GPU, the calibration pair once for the suite: each timed study's report says what
+    // a fragment timing stands for on the device (lavapipe's two paths are the same CPU).
+    let on_gpu = !gpu.device.report.device_type.eq_ignore_ascii_case("cpu");
+    let calibration = if on_gpu && studies.iter().any(|s| s.reference.is_none()) {
+        Some(calibrate(gpu, CalibrationSetup::default())?)
+    } else {
+        None
+    };
     let mut written = Vec::with_capacity(studies.len());
     for (i, (study, timed)) in studies.iter().zip(timed).enumerate() {
         let mut timed = timed;
         if let Some(Some((info, counts))) = counts.get(i) {
             timed.results.record_counts(info.clone(), counts);
+        }
+        if study.reference.is_none() {
+            timed.results.calibration.clone_from(&calibration);
         }
         let error_maps = std::mem::take(&mut timed.error_maps);
         let (results, meta) = finish(study, timed, run.counter.is_some());

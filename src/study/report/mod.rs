@@ -230,6 +230,20 @@ fn study_header(md: &mut String, s: &StudyDir, out_dir: &Path) {
         relative(&s.dir, out_dir),
     );
     let _ = writeln!(md, "Command: `{}`\n", r.command);
+    if let Some(c) = &r.calibration {
+        let _ = writeln!(
+            md,
+            "Calibration (`lamina devices --calibrate`, {}x{} pixels, {} multiply-adds each): a \
+             fragment draw {:.3} ms, the same work as a compute dispatch {:.3} ms: compute runs \
+             it {:.2}× as fast on this device.\n",
+            c.width,
+            c.height,
+            c.iterations,
+            c.fragment_ms,
+            c.compute_ms,
+            c.compute_to_fragment()
+        );
+    }
 }
 
 fn study_section(md: &mut String, s: &StudyDir, out_dir: &Path) {

@@ -81,6 +81,7 @@ fn the_reading_names_agreement_rebuilds_and_fp16_emulation() {
             scene: crate::render::scene::Scene::Sphere,
             counter: None,
             lighting: None,
+            calibration: None,
             runs: vec![
                 run(&key("model=ggx"), 1.0, 2_000_000, 8_000_000),
                 // 34 M outside the JIT code against the baseline's 6 M: rebuilt.
@@ -187,6 +188,7 @@ fn per_pixel_counts_are_the_main_figure() {
                 shaded_pixels: [2304, 9216],
             }),
             lighting: None,
+            calibration: None,
             runs: vec![
                 counted("model=ggx", 1_000_000, 300.0, 1.0),
                 counted("model=tm2,max_layers=4", 5_000_000, 2400.0, 8.0),
@@ -292,6 +294,7 @@ fn targets_pivot_dilution_and_bake_error_are_reported() {
                 shaded_pixels: [300, 1200],
             }),
             lighting: None,
+            calibration: None,
             runs,
         },
         meta: StudyMeta {
@@ -485,6 +488,7 @@ fn a_study_on_two_devices_gets_a_table_of_both_ratios() {
                 scene: crate::render::scene::Scene::FullScreen,
                 counter: None,
                 lighting: None,
+                calibration: None,
                 runs: vec![run(&key("model=ggx"), 1.0, 0, 0), tm2],
             },
             meta: StudyMeta {
@@ -509,8 +513,24 @@ fn a_study_on_two_devices_gets_a_table_of_both_ratios() {
             },
         }
     };
-    let md = render(&[on("lavapipe", 2.5), on("H100", 21.75)], Path::new("R.md"));
+    let mut h100 = on("H100", 21.75);
+    h100.results.calibration = Some(crate::profile::calibrate::Calibration {
+        width: 1920,
+        height: 1080,
+        iterations: 256,
+        repeats: 5,
+        fragment_ms: 2.0,
+        compute_ms: 0.25,
+        fragment_invocations: None,
+        compute_invocations: None,
+    });
+    let md = render(&[on("lavapipe", 2.5), h100], Path::new("R.md"));
     assert!(md.contains("## Across devices"), "{md}");
+    assert!(
+        md.contains("a fragment draw 2.000 ms, the same work as a compute dispatch 0.250 ms: \
+             compute runs it 8.00× as fast on this device"),
+        "{md}"
+    );
     assert!(
         md.contains("| model | material | lavapipe | H100 |"),
         "{md}"
