@@ -527,8 +527,10 @@ fn a_study_on_two_devices_gets_a_table_of_both_ratios() {
     let md = render(&[on("lavapipe", 2.5), h100], Path::new("R.md"));
     assert!(md.contains("## Across devices"), "{md}");
     assert!(
-        md.contains("a fragment draw 2.000 ms, the same work as a compute dispatch 0.250 ms: \
-             compute runs it 8.00× as fast on this device"),
+        md.contains(
+            "a fragment draw 2.000 ms, the same work as a compute dispatch 0.250 ms: \
+             compute runs it 8.00× as fast on this device"
+        ),
         "{md}"
     );
     assert!(
