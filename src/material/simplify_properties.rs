@@ -458,3 +458,62 @@ fn simplified_stacks_evaluate_as_the_originals() {
         failures[0]
     );
 }
+
+/// Cases per model under `transport=corrected` with single-scattering interfaces (each builds
+/// the material's energy ratios twice), and with multiple-scattering ones, whose columns are
+/// walks and cost more.
+const CORRECTED_CASES: [usize; 2] = [32, 8];
+
+/// `transport=corrected` ignores what simplification removes: its ratios come from the paper's
+/// lobes (unchanged, above) and from the discrete-ordinates transport, to which an
+/// index-matched interface of any roughness and a zero-depth medium are nothing
+/// (`model::angular`'s `what_changes_nothing_changes_nothing`). The same planted stacks, both
+/// models, both interface modes: the corrected evaluation of the simplified stack equals the
+/// original's within the same tolerance.
+#[test]
+fn simplified_stacks_evaluate_as_the_originals_under_the_corrected_transport() {
+    use crate::model::transport;
+    use crate::variant::Interfaces;
+
+    let coarse = ExactFgd {
+        g2: G2::Smith,
+        resolution: 4,
+    };
+    let mut failures = Vec::new();
+    for (salt, model) in [(0x3c, Model::Tm2), (0x7c, Model::Tm6)] {
+        for (mode, cases) in [Interfaces::Single, Interfaces::Multiple]
+            .into_iter()
+            .zip(CORRECTED_CASES)
+        {
+            let start = Instant::now();
+            let tally = parallel(cases, |k, tally| {
+                let mut rng = Rng(case_seed(0x51b1_1f1e_2027_0027 ^ salt, k));
+                let (stack, mu) = planted_stack(&mut rng, model, 6);
+                let label = format!("{model} case {k}, transport=corrected, interfaces={mode}");
+                run_case(tally, &label, &stack, mu, |s| {
+                    transport::evaluate(model, mode, &s.layers, mu, &coarse, &ExactTir)
+                });
+            });
+            println!(
+                "{model}, interfaces={mode}: {} corrected cases in {:.1} s, largest difference \
+                 {:.1e}; rules fired: {:?}",
+                tally.cases,
+                start.elapsed().as_secs_f64(),
+                tally.worst,
+                tally.fired
+            );
+            let fired = tally.fired.get("index-matched").copied().unwrap_or(0);
+            assert!(
+                fired >= cases / 4,
+                "{model}: index-matched fired {fired} times"
+            );
+            failures.extend(tally.failures);
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} corrected cases failed; the first:\n{}",
+        failures.len(),
+        failures[0]
+    );
+}

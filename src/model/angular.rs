@@ -77,9 +77,14 @@ impl Operator {
         Operator(self.0.iter().map(|row| then.apply(row)).collect())
     }
 
-    /// (I − self)⁻¹ by Gauss–Jordan elimination with partial pivoting. `self` sends back less
-    /// than it receives (an energy operator of a gap between two boundaries), so I − self is
-    /// diagonally dominant by columns' sums and the elimination is stable.
+    /// (I − self)⁻¹ by Gauss–Jordan elimination with partial pivoting. `self` sends back at
+    /// most what it receives (an energy operator of a gap between two boundaries), so I − self
+    /// is diagonally dominant by columns' sums and the elimination is stable — but for a closed
+    /// lossless mode: bins that both boundaries reflect whole into themselves (a smooth layer
+    /// denser than both its neighbours traps by total internal reflection every direction
+    /// beyond both critical angles). No light from outside reaches such bins through smooth
+    /// boundaries, and I − self is singular there; a pivot below [`PIVOT_FLOOR`] is such a
+    /// mode, taken as one pass (its 1 kept) rather than divided by.
     fn resolvent(&self) -> Operator {
         let mut a: Vec<Row> = self
             .0
@@ -96,6 +101,9 @@ impl Operator {
                 .unwrap_or(col);
             a.swap(col, pivot);
             inv.swap(col, pivot);
+            if a[col][col].abs() < PIVOT_FLOOR {
+                a[col][col] = 1.0;
+            }
             let p = a[col][col];
             for k in 0..BINS {
                 a[col][k] /= p;
@@ -114,6 +122,9 @@ impl Operator {
         Operator(inv)
     }
 }
+
+/// Pivots of the resolvent below which a bin is a closed lossless mode ([`Operator::resolvent`]).
+const PIVOT_FLOOR: f64 = 1e-12;
 
 fn bin_of(mu: f64) -> usize {
     ((mu.clamp(0.0, 1.0) * BINS as f64) as usize).min(BINS - 1)
@@ -451,12 +462,16 @@ impl Transport {
                 break;
             }
             let eta = avg(layer.ior) / above;
+            // An index-matched interface is none, and the index above the next one stays the
+            // last refracting layer's, as in the model (whose skip it is): so a stack reads the
+            // same with such a layer or without it (`material::simplify`).
             if (eta - 1.0).abs() >= INDEX_MATCHED {
                 own.push(Step::Interface {
                     eta,
                     alpha: layer.roughness,
                     boundary: Boundary::interface(eta, layer.roughness, mode),
                 });
+                above = avg(layer.ior);
             }
             if media && layer.depth > 0.0 {
                 own.push(Step::Medium(std::array::from_fn(|c| {
@@ -467,7 +482,6 @@ impl Transport {
                 })));
             }
             steps.push(own);
-            above = avg(layer.ior);
         }
         Self {
             layers: steps,
@@ -659,6 +673,25 @@ mod tests {
         // Single scattering loses light at the same stack.
         let (r, t) = run(&stack, 0.4, true, Interfaces::Single);
         assert!(r[2][0] + t[0] < 0.99);
+    }
+
+    #[test]
+    fn a_smooth_layer_that_traps_light_by_total_internal_reflection_stays_finite() {
+        // η 3.2 between 2.9 and 2.28, smooth: the directions beyond both critical angles are
+        // a closed lossless mode, where I − R′R is singular (it gave NaN). Exact refraction
+        // never enters it; the bins' centres let a little in, which stays there, as trapped
+        // light does: R + T is finite, at most 1, and short of it by that leak only.
+        let stack = [coat(2.9, 0.0), coat(3.2, 0.0), coat(2.28, 0.0)];
+        for mode in [Interfaces::Single, Interfaces::Multiple] {
+            for mu in [1.0, 0.5, 0.05] {
+                let (r, t) = run(&stack, mu, false, mode);
+                let sum = r[2][0] + t[0];
+                assert!(
+                    sum.is_finite() && sum <= 1.0 + 1e-9 && sum > 0.95,
+                    "{mode}, μ {mu}: R + T = {sum}"
+                );
+            }
+        }
     }
 
     #[test]
