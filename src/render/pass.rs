@@ -171,24 +171,20 @@ impl PassKey {
     /// fits a generic pass, a stack of the same structure under `specialized`, the same stack
     /// under the other modes.
     pub fn admits(&self, layers: &[LayerParams]) -> Result<()> {
-        if ends_transmissive(layers) != self.transmits {
-            let kind = |t: bool| if t { "transmits" } else { "is opaque" };
+        // What ends the stack decides which lobe code the pass holds (DIFFUSE_BASE, TRANSMITS).
+        let base = |diffuse: bool, transmits: bool| match (diffuse, transmits) {
+            (true, _) => "ends in a diffuse base",
+            (false, true) => "ends in a dielectric and transmits",
+            (false, false) => "ends in a conductor",
+        };
+        let (diffuse, transmits) = (ends_diffuse(layers), ends_transmissive(layers));
+        if (diffuse, transmits) != (self.diffuse, self.transmits) {
             return Err(Error::Unsupported(format!(
                 "this pass ({}) was built for a stack that {} and this one {}; prepare a pass \
                  for this stack",
                 self.variant,
-                kind(self.transmits),
-                kind(!self.transmits)
-            )));
-        }
-        if ends_diffuse(layers) != self.diffuse {
-            let kind = |d: bool| if d { "ends in" } else { "has no" };
-            return Err(Error::Unsupported(format!(
-                "this pass ({}) was built for a stack that {} diffuse base and this one {} one; \
-                 prepare a pass for this stack",
-                self.variant,
-                kind(self.diffuse),
-                kind(!self.diffuse)
+                base(self.diffuse, self.transmits),
+                base(diffuse, transmits)
             )));
         }
         let same = match &self.material {
