@@ -126,9 +126,18 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
     print!("{}", results.table());
     for run in &results.runs {
         if let Some(e) = run.image_error {
-            let floor = run
-                .reference_flip_floor
-                .map_or(String::new(), |f| format!(" (noise floor {f:.4})"));
+            let mut parts = Vec::new();
+            if let Some(f) = run.reference_flip_floor {
+                parts.push(format!("noise floor {f:.4}"));
+            }
+            if let (Some(l), Some(m)) = (run.lighting_error, run.model_error) {
+                parts.push(format!("lighting {:.4}, model {:.4}", l.flip, m.flip));
+            }
+            let floor = if parts.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", parts.join("; "))
+            };
             println!(
                 "image error: FLIP {:.4}{floor}, RMSE {:.2e}, max relative {:.1} %  {} | {}",
                 e.flip,

@@ -7,7 +7,9 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use lamina::imageio;
 use lamina::material::{resolve_with_variant, Stack};
+use lamina::profile::bench::place_scene;
 use lamina::render::reference;
+use lamina::render::scene::Scene;
 use lamina::render::{PassKey, Renderer, TargetFormat};
 use lamina::tables::environment::EnvDesc;
 
@@ -20,6 +22,10 @@ use super::{
 pub struct RenderArgs {
     #[command(flatten)]
     scene: SceneArgs<RenderScene>,
+    /// What is drawn: `sphere`, the unit sphere before the sky, or `fullscreen`, the grid
+    /// `bench` measures by default (every pixel once, with the sphere's spread of view angles).
+    #[arg(long = "scene", default_value = "sphere", value_name = "SCENE")]
+    shape: Scene,
     /// Linear HDR output (RGBA half).
     #[arg(long, value_name = "FILE.exr", default_value = "out/render.exr")]
     out: PathBuf,
@@ -83,6 +89,7 @@ pub fn run(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
     let pass = renderer.prepare(&key)?;
     renderer.set_surface(stack.surface.as_ref())?;
     let (width, height) = (scene.size.width, scene.size.height);
+    place_scene(&mut renderer, args.shape, width, height)?;
     for _ in 0..args.warmup {
         renderer.render(&pass, &layers, width, height)?;
     }
@@ -166,6 +173,7 @@ fn run_reference(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
         Renderer::with_target(&gpu, &equirect, EnvDesc::default(), TargetFormat::Float)?;
     renderer.lighting = scene.lights.lighting()?;
     let (width, height) = (scene.size.width, scene.size.height);
+    place_scene(&mut renderer, args.shape, width, height)?;
     let bar = ProgressBar::new(0);
     bar.set_style(
         ProgressStyle::with_template(

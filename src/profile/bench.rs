@@ -144,6 +144,8 @@ fn timed_run(case: &Case, t: &CaseTiming, baseline: f64, config: &BenchConfig) -
         reference_noise: None,
         reference_flip_floor: None,
         image_error_vs_fp32: None,
+        lighting_error: None,
+        model_error: None,
     }
 }
 

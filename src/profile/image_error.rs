@@ -132,13 +132,22 @@ pub fn measure(
             let (image, floor) = reference_with_floor(&mut renderer, &key, &never)?;
             references.images.push((key.clone(), image, floor));
         }
+        if references.find_lobes(&key, case.variant).is_none() {
+            let image = own_lobes(&mut renderer, &key, case.variant, &never)?;
+            references.lobes.push((key.clone(), case.variant, image));
+        }
         let (image, floor) = references.find(&key).expect("rendered above");
+        let own = references
+            .find_lobes(&key, case.variant)
+            .expect("rendered above");
         let pass = passes.get(&mut renderer, &case.pass_key(&config.lighting)?)?;
         let frame = renderer.render(pass, &layers, width, height)?;
         let (error, map) = compare(&frame.pixels, &image.pixels, width, height);
         errors[i].error = Some(error);
         errors[i].reference_noise = Some(image.noise);
         errors[i].flip_floor = Some(floor);
+        errors[i].lighting = Some(compare(&frame.pixels, &own.pixels, width, height).0);
+        errors[i].model = Some(compare(&own.pixels, &image.pixels, width, height).0);
         maps.push((i, map));
         frames[i] = Some(frame.pixels);
     }
@@ -196,6 +205,32 @@ fn reference_with_floor(
     Ok((image, floor))
 }
 
+/// The reference image of `variant`'s own lobes (`reference::render_variant`) of `key`'s
+/// stack, scene and samples — the same seed as the exact model's reference, so that the two
+/// share their samples and the model part compares lobes, not noise.
+fn own_lobes(
+    renderer: &mut Renderer<'_>,
+    key: &ReferenceKey,
+    variant: VariantKey,
+    never: &AtomicBool,
+) -> Result<ReferenceImage> {
+    let convergence = Convergence {
+        spp: key.spp,
+        noise: None,
+        seed: key.seed,
+    };
+    reference::render_variant(
+        renderer,
+        variant,
+        &key.layers,
+        key.size,
+        convergence,
+        &mut |_, _| {},
+        never,
+    )
+    .map(|image| image.expect("an image-error reference is never stopped"))
+}
+
 /// What a reference image depends on, under one environment: the stack in its model, the
 /// scene and size, the lighting, the samples and their seed.
 #[derive(Clone, PartialEq)]
@@ -216,6 +251,8 @@ struct ReferenceKey {
 #[derive(Default)]
 pub struct References {
     images: Vec<(ReferenceKey, ReferenceImage, f64)>,
+    /// The references of variants' own lobes ([`own_lobes`]).
+    lobes: Vec<(ReferenceKey, VariantKey, ReferenceImage)>,
 }
 
 impl References {
@@ -224,6 +261,13 @@ impl References {
             .iter()
             .find(|(k, ..)| k == key)
             .map(|(_, i, floor)| (i, *floor))
+    }
+
+    fn find_lobes(&self, key: &ReferenceKey, variant: VariantKey) -> Option<&ReferenceImage> {
+        self.lobes
+            .iter()
+            .find(|(k, v, _)| k == key && *v == variant)
+            .map(|(.., i)| i)
     }
 }
 

@@ -95,6 +95,17 @@ pub struct Run {
     /// what fp16 alone changes (its banding, as a number).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub image_error_vs_fp32: Option<ImageError>,
+    /// The image error's lighting part: the run's image against the reference image of its
+    /// own lobes (`render::reference::render_variant`: the lobes the variant computes,
+    /// integrated exactly). What the image-based lighting and the lights' approximations
+    /// alone cost.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lighting_error: Option<ImageError>,
+    /// The image error's model part: the reference image of the run's own lobes against the
+    /// exact model's (the one [`Run::image_error`] is measured against). What the variant's
+    /// lobes (its tables, precision, TIR mode, transport) alone cost.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model_error: Option<ImageError>,
 }
 
 /// The spread of a run's active layer count over its shaded pixels.
@@ -203,6 +214,8 @@ pub struct CaseImageError {
     pub reference_noise: Option<f64>,
     pub flip_floor: Option<f64>,
     pub vs_fp32: Option<ImageError>,
+    pub lighting: Option<ImageError>,
+    pub model: Option<ImageError>,
 }
 
 /// The instructions of one case's shaded draw at the two counted sizes
@@ -225,6 +238,8 @@ impl Results {
             run.reference_noise = e.reference_noise;
             run.reference_flip_floor = e.flip_floor;
             run.image_error_vs_fp32 = e.vs_fp32;
+            run.lighting_error = e.lighting;
+            run.model_error = e.model;
         }
     }
 
@@ -295,11 +310,12 @@ impl Results {
             "variant,material,frames,min_ms,median_ms,mean_ms,max_ms,stdev_ms,ratio_to_baseline,\
              fragment_invocations,pipeline_ms,spirv_bytes,instructions,instructions_total,\
              instructions_large,instructions_total_large,instructions_per_pixel,\
-             instructions_per_pixel_ratio,flip,rmse,max_relative_error,flip_vs_fp32\n",
+             instructions_per_pixel_ratio,flip,rmse,max_relative_error,flip_vs_fp32,flip_floor,\
+             flip_lighting,flip_model\n",
         );
         for r in &self.runs {
             out += &format!(
-                "\"{}\",\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                "\"{}\",\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 r.variant,
                 r.material.replace('"', "\"\""),
                 r.frames,
@@ -321,7 +337,10 @@ impl Results {
                 opt_f(r.image_error.map(|e| e.flip)),
                 opt_f(r.image_error.map(|e| e.rmse)),
                 opt_f(r.image_error.map(|e| e.max_relative)),
-                opt_f(r.image_error_vs_fp32.map(|e| e.flip))
+                opt_f(r.image_error_vs_fp32.map(|e| e.flip)),
+                opt_f(r.reference_flip_floor),
+                opt_f(r.lighting_error.map(|e| e.flip)),
+                opt_f(r.model_error.map(|e| e.flip))
             );
         }
         out

@@ -18,15 +18,19 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::gpu::Gpu;
 use crate::model::fgd::ExactFgd;
 use crate::model::light::{lobe_albedo, MIN_ALPHA};
 use crate::model::oracle::evaluate_model;
-use crate::model::{ends_transmissive, LayerParams, Lobe};
+use crate::model::Fgd;
+use crate::model::{ends_transmissive, Evaluation, LayerParams, Lobe};
 use crate::reference::compare::ExactTir;
 use crate::shader::specialize::{BakedShape, MAX_BAKED_LOBES};
-use crate::variant::{Model, G2};
+use crate::tables::split_sum::SplitSumTable;
+use crate::variant::{Mode, Model, VariantKey, G2};
 
 use super::baked::{sample_cos, BakedTable};
+use super::eval::GpuEvaluator;
 use super::Renderer;
 
 /// View cosines the host evaluates the model at.
@@ -45,22 +49,90 @@ pub const MAX_SPP: u32 = 1 << 20;
 /// Grid side of the exact FGD integral at each tabulated cosine.
 const FGD_GRID: u32 = 256;
 
-/// The exact model's lobes over the view cosine, as the reference pass reads them: two rows per
-/// lobe, (weight / E, √α) then (E, behind, 0, 0) per sample, √α = −1 for a diffuse base's lobe
-/// (E = 1). A stack that transmits (`model::ends_transmissive`) adds, last, the lobe it
-/// transmits as the forward pass shades it (a thin slab: weight T, roughness
-/// `Evaluation::transmitted_roughness`), with behind = 1: lit from behind the surface. The
-/// table's `lobe_count` counts rows; its `retro_mask`, lobes; its `kept`, the reflected ones.
+/// The exact model's lobes over the view cosine, as the reference pass reads them
+/// ([`table_of`]).
 pub fn lobe_table(model: Model, layers: &[LayerParams]) -> Result<BakedTable> {
     let fgd = ExactFgd {
         g2: G2_FORM,
         resolution: FGD_GRID,
     };
-    let size = TABLE_SIZE;
-    let evaluations: Vec<_> = (0..size)
+    let evaluations: Vec<_> = (0..TABLE_SIZE)
         .into_par_iter()
-        .map(|j| evaluate_model(model, layers, sample_cos(j, size), &fgd, &ExactTir))
+        .map(|j| evaluate_model(model, layers, sample_cos(j, TABLE_SIZE), &fgd, &ExactTir))
         .collect();
+    table_of(&evaluations, layers)
+}
+
+/// The lobes `variant`'s real-time pass computes for `layers`, over the view cosine, as the
+/// reference pass reads them ([`table_of`]): the transfer-matrix models evaluated on the GPU
+/// by the variant's own shader library (`render::eval`: its tables, precision and TIR mode;
+/// `mode=baked`'s lobes are `mode=generic`'s, which it tabulates), `model=ggx`'s one lobe of
+/// energy F0·A + B from the split-sum table its pass reads (the thin slab's 1 − that where
+/// the stack transmits). Integrated exactly, they are what the pass would show with perfect
+/// lighting: the reference of its lighting's error alone.
+pub fn variant_lobe_table(
+    gpu: &Gpu,
+    variant: VariantKey,
+    layers: &[LayerParams],
+    split_sum: &SplitSumTable,
+) -> Result<BakedTable> {
+    let cosines: Vec<f64> = (0..TABLE_SIZE).map(|j| sample_cos(j, TABLE_SIZE)).collect();
+    let evaluations = if variant.model == Model::Ggx {
+        let top = layers.first().ok_or_else(|| {
+            Error::Unsupported("a reference needs a stack of at least one layer".into())
+        })?;
+        cosines
+            .iter()
+            .map(|&mu| ggx_evaluation(top, mu, split_sum, ends_transmissive(layers)))
+            .collect()
+    } else {
+        let evaluated = VariantKey {
+            mode: if variant.mode == Mode::Baked {
+                Mode::Generic
+            } else {
+                variant.mode
+            },
+            ..variant
+        };
+        GpuEvaluator::new(gpu, evaluated)?.evaluate(layers, &cosines)?
+    };
+    table_of(&evaluations, layers)
+}
+
+/// `model=ggx`'s lobe at view cosine `mu` (`forward.frag.glsl`'s shade_ggx).
+fn ggx_evaluation(
+    top: &LayerParams,
+    mu: f64,
+    split_sum: &SplitSumTable,
+    transmits: bool,
+) -> Evaluation {
+    let alpha = top.roughness;
+    let albedo: [f64; 3] =
+        std::array::from_fn(|c| split_sum.fgd(mu, alpha, top.ior[c], top.kappa[c]));
+    let through = albedo.map(|a| if transmits { (1.0 - a).max(0.0) } else { 0.0 });
+    Evaluation {
+        reflectance: albedo,
+        transmittance: through,
+        transmitted_roughness: alpha,
+        lobes: vec![Lobe {
+            weight: albedo,
+            roughness: alpha,
+            diffuse: false,
+        }],
+        lobe_layers: Vec::new(),
+        retro_mask: 0,
+    }
+}
+
+/// Lobes over the view cosine (`evaluations` at [`TABLE_SIZE`] cosines, [`sample_cos`]), as the
+/// reference pass reads them: two rows per lobe, (weight / E, √α) then (E, behind, 0, 0) per
+/// sample, √α = −1 for a diffuse base's lobe (E = 1). A stack that transmits
+/// (`model::ends_transmissive`) adds, last, the lobe it transmits as the forward pass shades
+/// it (a thin slab: weight T, roughness `Evaluation::transmitted_roughness`), with behind = 1:
+/// lit from behind the surface. The table's `lobe_count` counts rows; its `retro_mask`,
+/// lobes; its `kept`, the reflected ones.
+fn table_of(evaluations: &[Evaluation], layers: &[LayerParams]) -> Result<BakedTable> {
+    let size = TABLE_SIZE;
     let first = &evaluations[0];
     if evaluations
         .iter()
@@ -294,6 +366,62 @@ pub fn render(
         ));
     }
     let table = lobe_table(model, layers)?;
+    render_table(
+        renderer,
+        model,
+        layers,
+        table,
+        (width, height),
+        convergence,
+        progress,
+        stop,
+    )
+}
+
+/// The reference image of the lobes `variant`'s real-time pass computes for the uniform stack
+/// `layers` ([`variant_lobe_table`]), otherwise as [`render`]: against it, the pass's image
+/// differs by its lighting alone; it differs from [`render`]'s by the variant's lobes.
+pub fn render_variant(
+    renderer: &mut Renderer<'_>,
+    variant: VariantKey,
+    layers: &[LayerParams],
+    size: (u32, u32),
+    convergence: Convergence,
+    progress: &mut dyn FnMut(u32, u32),
+    stop: &AtomicBool,
+) -> Result<Option<ReferenceImage>> {
+    convergence.check()?;
+    renderer.inputs.prepare(variant)?;
+    let table = variant_lobe_table(
+        renderer.gpu(),
+        variant,
+        layers,
+        renderer.inputs.split_sum(variant)?,
+    )?;
+    render_table(
+        renderer,
+        variant.model,
+        layers,
+        table,
+        size,
+        convergence,
+        progress,
+        stop,
+    )
+}
+
+/// Integrates the lobes of `table` (two rows per lobe, [`table_of`]) over `renderer`'s scene.
+#[allow(clippy::too_many_arguments)]
+fn render_table(
+    renderer: &mut Renderer<'_>,
+    model: Model,
+    layers: &[LayerParams],
+    table: BakedTable,
+    (width, height): (u32, u32),
+    convergence: Convergence,
+    progress: &mut dyn FnMut(u32, u32),
+    stop: &AtomicBool,
+) -> Result<Option<ReferenceImage>> {
     let pass = renderer.prepare_reference(model, layers, table)?;
     let frames = convergence.spp.div_ceil(SAMPLES_PER_FRAME);
     let mut accumulator = Accumulator::new((width * height) as usize);

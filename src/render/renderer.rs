@@ -265,7 +265,7 @@ impl<'g> Renderer<'g> {
     }
 
     /// The reference pass of the uniform stack `layers` in `model` (`render::reference`),
-    /// reading the exact model's lobes from `table`.
+    /// reading the lobes from `table` (`render::reference::table_of`).
     pub fn prepare_reference(
         &mut self,
         model: Model,

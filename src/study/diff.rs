@@ -341,6 +341,8 @@ mod tests {
             reference_noise: None,
             reference_flip_floor: None,
             image_error_vs_fp32: None,
+            lighting_error: None,
+            model_error: None,
         }
     }
 

@@ -187,3 +187,48 @@ fn fp16_variant_renders_finite_pixels() {
     assert!(frame.pixels.iter().flatten().all(|c| c.is_finite()));
     common::assert_validation_clean(&gpu);
 }
+
+/// `render --scene fullscreen` draws what `bench` measures by default: every pixel shaded
+/// once, no sky; the sphere leaves the sky in the frame's corners. Both through the real-time
+/// pass and the reference.
+#[test]
+fn render_draws_the_scene_it_is_asked_for() {
+    let dir = common::scratch_dir("render-scene");
+    let corner = |args: &[&str]| {
+        let mut all = vec![
+            "--validation",
+            "render",
+            "--size",
+            "16x8",
+            "--material",
+            "gold",
+            "--out",
+            "r.exr",
+            "--png",
+            "r.png",
+        ];
+        all.extend_from_slice(args);
+        let out = common::lamina(&all, &dir);
+        assert!(out.status.success(), "{}", common::text(&out.stderr));
+        lamina::imageio::read_exr(&dir.join("r.exr"))
+            .unwrap()
+            .pixels[0]
+    };
+    // The real-time image is written in half floats, the reference in floats.
+    let is_sky =
+        |p: [f32; 4], sky: [f32; 4]| (0..3).all(|c| (p[c] - sky[c]).abs() <= 1e-3 * sky[c]);
+    let sky = corner(&[]);
+    assert!(!is_sky(corner(&["--scene", "fullscreen"]), sky));
+    let reference = ["--reference", "--spp", "16"];
+    assert!(
+        is_sky(corner(&reference), sky),
+        "the reference's sphere has the same sky"
+    );
+    assert!(!is_sky(
+        corner(&[&reference[..], &["--scene", "fullscreen"]].concat()),
+        sky
+    ));
+    let bad = common::lamina(&["render", "--scene", "cube"], &dir);
+    assert!(!bad.status.success());
+    assert!(common::text(&bad.stderr).contains("sphere, fullscreen"));
+}

@@ -409,6 +409,38 @@ fn a_sweep_measures_each_run_against_the_reference_image() {
         assert!(e["rmse"].as_f64().unwrap() >= 0.0);
         assert!(run["reference_noise"].as_f64().unwrap() > 0.0);
         assert!(dir.join(format!("res/error-maps/run-{i}.png")).is_file());
+        for part in ["lighting_error", "model_error"] {
+            let flip = run[part]["flip"].as_f64().unwrap();
+            assert!((0.0..1.0).contains(&flip), "run {i}: {part} FLIP {flip}");
+        }
+    }
+    // Gold is one conductor lobe, whose energy under fgd=karis is the ggx baseline's F0·A + B:
+    // the two runs' own lobes are one, and so are their model parts, which the split sum's
+    // lighting part dwarfs.
+    let part = |i: usize, p: &str| runs[i][p]["flip"].as_f64().unwrap();
+    assert!(runs[0]["variant"]
+        .as_str()
+        .unwrap()
+        .starts_with("model=ggx"));
+    let single = (0..runs.len())
+        .find(|&i| {
+            let v = runs[i]["variant"].as_str().unwrap();
+            v.starts_with("model=tm2") && v.contains("fp16=off")
+        })
+        .unwrap();
+    assert!(
+        (part(0, "model_error") - part(single, "model_error")).abs() < 1e-3,
+        "ggx {} against tm2 {}",
+        part(0, "model_error"),
+        part(single, "model_error")
+    );
+    for i in [0, single] {
+        assert!(
+            part(i, "lighting_error") > 2.0 * part(i, "model_error"),
+            "run {i}: lighting {} against model {}",
+            part(i, "lighting_error"),
+            part(i, "model_error")
+        );
     }
     // fp16 against its fp32 twin: only for the fp16 run.
     let halves: Vec<usize> = (0..runs.len())
@@ -423,15 +455,13 @@ fn a_sweep_measures_each_run_against_the_reference_image() {
         .join(format!("res/error-maps/run-{}-vs-fp32.png", halves[0]))
         .is_file());
     let csv = std::fs::read_to_string(dir.join("res/results.csv")).unwrap();
-    assert!(csv
-        .lines()
-        .next()
-        .unwrap()
-        .ends_with(",flip,rmse,max_relative_error,flip_vs_fp32"));
+    assert!(csv.lines().next().unwrap().ends_with(
+        ",flip,rmse,max_relative_error,flip_vs_fp32,flip_floor,flip_lighting,flip_model"
+    ));
     assert!(dir.join("res/chart-pareto-time.png").is_file());
     let report = std::fs::read_to_string(dir.join("res/REPORT.md")).unwrap();
     for expected in [
-        "| run | material | FLIP | RMSE | max rel. error | median ms | Pareto | error map |",
+        "| run | material | FLIP | lighting | model | RMSE | max rel. error | median ms | Pareto | error map |",
         "| ggx baseline | gold |",
         "](error-maps/run-0.png)",
         "chart-pareto-time.png",

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::profile::image_error::{error_map_path, fp32_error_map_path};
-use crate::profile::results::Run;
+use crate::profile::results::{ImageError, Run};
 use crate::reference::compare::{MaterialReference, ReferenceRow};
 use crate::study::charts::{pareto_front, reference_chart_stem, run_label};
 use crate::study::dirs::StudyDir;
@@ -168,7 +168,13 @@ fn image_error_intro(md: &mut String, s: &StudyDir, counted: bool) {
          no prefiltering, no FGD table; relative noise at most {noise:.1e}): mean FLIP (in \
          parentheses, where measured, the reference's noise floor: the FLIP between it and the \
          same reference from the next seed), RMSE and the largest relative error of the \
-         radiance (`profile::image_error`). A run is on the Pareto front when no run of its \
+         radiance (`profile::image_error`). The error in two parts, where measured: \
+         *lighting*, the run's image against the reference of its own lobes (the lobes the \
+         variant computes, integrated exactly: what its image-based lighting and lights \
+         alone cost), and *model*, that reference against the exact model's (what its lobes \
+         alone cost; both references from one seed, so their noise largely cancels). FLIP \
+         does not add: each part is the FLIP of its two images, and the whole lies within \
+         their sum. A run is on the Pareto front when no run of its \
          material is both cheaper ({}) and closer.\n",
         if counted {
             "JIT instructions per pixel"
@@ -187,14 +193,14 @@ pub(super) fn image_error_section(md: &mut String, s: &StudyDir, out_dir: &Path)
     image_error_intro(md, s, counted);
     let _ = writeln!(
         md,
-        "| run | material | FLIP | RMSE | max rel. error | {} | Pareto | error map |",
+        "| run | material | FLIP | lighting | model | RMSE | max rel. error | {} | Pareto | error map |",
         if counted {
             "JIT instr. per pixel"
         } else {
             "median ms"
         }
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|");
     let mut dominated = Vec::new();
     for (i, run) in r.runs.iter().enumerate() {
         let Some(e) = run.image_error else {
@@ -214,11 +220,15 @@ pub(super) fn image_error_section(md: &mut String, s: &StudyDir, out_dir: &Path)
         let floor = run
             .reference_flip_floor
             .map_or(String::new(), |f| format!(" ({f:.4})"));
+        let part =
+            |p: Option<ImageError>| p.map_or("–".to_string(), |p| format!("{:.4}", p.flip));
         let _ = writeln!(
             md,
-            "| {name} | {} | {:.4}{floor} | {:.2e} | {:.1} % | {cost} | {} | [map]({}) |",
+            "| {name} | {} | {:.4}{floor} | {} | {} | {:.2e} | {:.1} % | {cost} | {} | [map]({}) |",
             run.material,
             e.flip,
+            part(run.lighting_error),
+            part(run.model_error),
             e.rmse,
             100.0 * e.max_relative,
             if front { "yes" } else { "dominated" },

@@ -48,6 +48,8 @@ fn run(variant: &str, ms: f64, jit: u64, total: u64) -> Run {
         reference_noise: None,
         reference_flip_floor: None,
         image_error_vs_fp32: None,
+        lighting_error: None,
+        model_error: None,
     }
 }
 
