@@ -1,8 +1,9 @@
 #version 460
-// The shaded pass. Every lobe is lit by one pre-filtered environment fetch along its dominant
-// direction, weighted by its energy (split sum per lobe, ALGORITHMS.md §8.2), at the scene's
-// scale s of the environment, and by each analytic light j of irradiance E_j from l_j as the
-// normalised microfacet lobe of its roughness (lib/light.glsl, src/model/light.rs):
+// The shaded pass. Every lobe is lit by the environment as the variant's `ibl` integrates it
+// (lobe_radiance; `split-sum`, the talk's: one prefiltered fetch along its dominant direction),
+// weighted by its energy (ALGORITHMS.md §8.2), at the scene's scale s of the environment, and
+// by each analytic light j of irradiance E_j from l_j as the normalised microfacet lobe of its
+// roughness (lib/light.glsl, src/model/light.rs):
 //   L = Σ_k e_k · (s·L̃(dir_k, α_k) + Σ_j E_j · f̂_k(l_j, v)).
 // MODEL = ggx: one GGX lobe of the top layer, energy F0·A + B (Karis 2013) — the yardstick
 // every transfer-matrix variant is divided by. MODEL = tm2 / tm6: the lobes of the
@@ -22,6 +23,7 @@
 
 #include "lib/ibl.glsl"
 #include "lib/light.glsl"
+#include "lib/sampling.glsl"
 #include "lib/tm2.glsl"
 #include "lib/tm6.glsl"
 
@@ -44,12 +46,57 @@ vec3 shade_behind(vec3 n, vec3 d) {
     return d - 2.0 * dot(n, d) * n;
 }
 
-// Pre-filtered radiance of a lobe of roughness α around `r` (the view for back-scatter), or
-// with `behind` of the transmitted lobe mirrored from it.
-vec3 lobe_radiance(vec3 n, vec3 r, float alpha, bool behind) {
+// One fetch of the environment along the dominant direction of a lobe of roughness α around
+// `r`, from the cube `ibl=split-sum` or the others read (`behind`: mirrored).
+vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
     vec3 dir = ibl_dominant_direction(n, r, alpha);
     dir = behind ? shade_behind(n, dir) : dir;
-    return textureLod(prefiltered, dir, ibl_mip_of_alpha(alpha, frame.params.x)).rgb;
+    float mip = alpha <= IBL_MIN_ALPHA ? 0.0 : ibl_mip_of_alpha(alpha, frame.params.x);
+    return IBL == IBL_SPLIT_SUM ? textureLod(prefiltered, dir, mip).rgb
+                                : textureLod(matched, dir, mip).rgb;
+}
+
+// ibl=taps: filtered importance sampling of the lobe (Křivánek & Colbert 2008, "Real-time
+// shading with filtered importance sampling"): IBL_TAP_COUNT directions l_i through the
+// visible normals of the GGX lobe about the view whose mirror image is `r` (Heitz 2018), each
+// read from the matched cube blurred over its share of the lobe — the solid angle
+// 1/(count·pdf(l_i)) taken as a GGX lobe's 4πα² — and weighted by G2/G1, which with the
+// visible normals' pdf G1·D/(4 v.z) makes Σ w_i L_i / Σ w_i the lobe's average radiance
+// (ALGORITHMS.md §8.2). A mirror lobe, or a view at the horizon, is one fetch.
+vec3 lobe_taps(vec3 n, vec3 r, float alpha, bool behind) {
+    mat3 frame_of_n = basis(n);
+    vec3 v = transpose(frame_of_n) * reflect(-r, n);
+    if (alpha <= IBL_MIN_ALPHA || v.z <= 1e-4) {
+        return lobe_fetch(n, r, alpha, behind);
+    }
+    // G2/G1 in the height-correlated form the reference's lobes take.
+    float masked = 1.0 + ibl_lambda(v.z, alpha);
+    float g1 = 1.0 / masked;
+    float mips = frame.params.x;
+    vec3 sum = vec3(0.0);
+    float total = 0.0;
+    for (uint i = 0u; i < IBL_TAP_COUNT; ++i) {
+        vec3 h = sample_ggx_vndf(v, hammersley(i, IBL_TAP_COUNT), alpha);
+        vec3 l = reflect(-v, h);
+        if (l.z <= 0.0) {
+            continue;
+        }
+        float w = masked / (masked + ibl_lambda(l.z, alpha));
+        float pdf = g1 * ibl_ggx_d(h.z, alpha) / (4.0 * v.z);
+        float share = 1.0 / (float(IBL_TAP_COUNT) * pdf);
+        vec3 d = frame_of_n * l;
+        d = behind ? shade_behind(n, d) : d;
+        sum += w * textureLod(matched, d, ibl_mip_of_alpha(sqrt(share / (4.0 * PI)), mips)).rgb;
+        total += w;
+    }
+    return total > 0.0 ? sum / total : lobe_fetch(n, r, alpha, behind);
+}
+
+// The environment's radiance through a lobe of roughness α around `r` (the view for
+// back-scatter), or with `behind` through the transmitted lobe mirrored from it, as the
+// variant's `ibl` integrates it.
+vec3 lobe_radiance(vec3 n, vec3 r, float alpha, bool behind) {
+    return IBL == IBL_TAPS ? lobe_taps(n, r, alpha, behind) : lobe_fetch(n, r, alpha, behind);
 }
 
 // Light j at the point: its direction `l` and the irradiance it brings normal to it.
@@ -167,8 +214,8 @@ vec3 shade_lobes(vec3 n, vec3 v, float n_dot_v) {
 
 // The baked lobes at the view cosine: each lobe's (weight, √α) interpolated linearly between
 // its two samples around √μ by the sampler (render/baked.rs), then lit like the model's
-// (lobe_radiance, with the mip read off √α directly). The row coordinate is a texel centre, so
-// the filter's weight on the neighbouring lobe is zero.
+// (lobe_light). The row coordinate is a texel centre, so the filter's weight on the
+// neighbouring lobe is zero.
 vec3 shade_baked(vec3 n, vec3 v, float n_dot_v) {
     float u = (sqrt(n_dot_v) * float(BAKED_SIZE - 1u) + 0.5) / float(BAKED_SIZE);
     vec3 mirror = reflect(-v, n);
@@ -178,13 +225,7 @@ vec3 shade_baked(vec3 n, vec3 v, float n_dot_v) {
         // .a is the perceptual roughness √α, the cube's mip axis.
         float alpha = lobe.a * lobe.a;
         bool retro = tm_bit(RETRO_MASK, k);
-        vec3 dir = ibl_dominant_direction(n, retro ? v : mirror, alpha);
-        vec3 radiance = lobe_lights(alpha, retro, false);
-        if (frame.params.y > 0.0) {
-            float mip = lobe.a * (frame.params.x - 1.0);
-            radiance += frame.params.y * textureLod(prefiltered, dir, mip).rgb;
-        }
-        sum += lobe.rgb * radiance;
+        sum += lobe.rgb * lobe_light(retro ? v : mirror, alpha, retro, false);
     }
     return sum;
 }

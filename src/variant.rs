@@ -4,8 +4,8 @@
 //! `model=tm2,max_layers=5,fp16=off,tir=none,fgd=karis,g2=height-correlated,ndf=ggx,mode=generic`
 //! so the CLI, sweep files and result rows share one spelling. Parsing accepts any subset of
 //! the axes (the rest take their defaults) in any order; printing always gives the axes above
-//! in that order, then `transport` and `interfaces` where they are off their defaults (added
-//! after the published study: keys written before them print as they did).
+//! in that order, then `transport`, `interfaces` and `ibl` where they are off their defaults
+//! (added after the published study: keys written before them print as they did).
 //!
 //! | axis | values | mechanism |
 //! |---|---|---|
@@ -19,6 +19,7 @@
 //! | mode | `generic`, `specialized`, `specialized-values`, `baked` | spec constant 7 (+ the material's structure, ids 8…17, and values, ids 32…) |
 //! | transport | `paper`, `corrected` | spec constant 21 (+ the material's energy ratios in its buffer) |
 //! | interfaces | `single`, `multiple` | which ratios the host computes for `corrected` |
+//! | ibl | `split-sum`, `matched`, `taps` | spec constant 23 (+ the matched cube, built when a pass needs it) |
 //!
 //! `mode` picks how much of the material the pipeline knows: nothing (`generic`, the talk's
 //! shader: parameters read at run time, arrays sized by `max_layers`), its structure
@@ -211,6 +212,26 @@ axis!(
     }
 );
 
+axis!(
+    /// How each lobe is lit by the environment (issue 30; ALGORITHMS.md §8.2).
+    Ibl, "ibl", {
+        /// One fetch per lobe along its dominant direction from the cube prefiltered as Karis
+        /// 2013 does (N = V = R, samples weighted by n·l): the talk's reproduction.
+        SplitSum = "split-sum",
+        /// The same one fetch from a cube prefiltered with the lobe's own weighting at normal
+        /// view (D·G2, the BRDF times the cosine), with more samples and no blur bias
+        /// (`tables::environment`): the split sum's idea with its environment made exact.
+        Matched = "matched",
+        /// Filtered importance sampling (Křivánek & Colbert 2008): [`IBL_TAP_COUNT`] directions
+        /// through the lobe's visible normals, each read from the matched cube at the mip
+        /// whose blur covers its share of the lobe, weighted G2/G1.
+        Taps = "taps",
+    }
+);
+
+/// The directions `ibl=taps` reads per lobe.
+pub const IBL_TAP_COUNT: u32 = 32;
+
 impl Mode {
     /// Whether a pipeline of this mode is built for one material.
     pub fn per_material(self) -> bool {
@@ -233,6 +254,8 @@ pub struct VariantKey {
     /// The interface mode `transport=corrected` takes its energies in (and the reference's
     /// truth it is meant to meet); `paper` has one.
     pub interfaces: Interfaces,
+    /// How the environment lights each lobe.
+    pub ibl: Ibl,
 }
 
 impl Default for VariantKey {
@@ -248,6 +271,7 @@ impl Default for VariantKey {
             mode: Mode::Generic,
             transport: Transport::Paper,
             interfaces: Interfaces::Single,
+            ibl: Ibl::SplitSum,
         }
     }
 }
@@ -263,6 +287,7 @@ pub const AXES: &[&str] = &[
     "mode",
     "transport",
     "interfaces",
+    "ibl",
 ];
 
 /// Layers whose numeric values a `specialized-values` pipeline holds as constants, and the
@@ -345,6 +370,8 @@ pub struct ShadeSpec {
     /// forward pass shades the transmitted lobe; 0 folds its code away. Set per material for
     /// the forward pass, always for the GPU evaluator's generic kernel.
     pub transmits: u32,
+    /// The `ibl` axis (id 23).
+    pub ibl: u32,
     /// `specialized-values`: the layers' values (see [`LAYER_VALUES`]).
     pub values: [[f32; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
 }
@@ -355,7 +382,7 @@ impl Default for ShadeSpec {
     }
 }
 
-const AXIS_ENTRIES: usize = 23;
+const AXIS_ENTRIES: usize = 24;
 const VALUE_ENTRIES: usize = (MAX_LAYERS_LIMIT * VALUES_PER_LAYER) as usize;
 
 const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENTRIES] {
@@ -364,7 +391,7 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
         offset: 0,
         size: 4,
     }; AXIS_ENTRIES + VALUE_ENTRIES];
-    // ids 0…22 are the u32 fields in declaration order, 4 bytes apart from offset 0.
+    // ids 0…23 are the u32 fields in declaration order, 4 bytes apart from offset 0.
     let mut i = 0;
     while i < AXIS_ENTRIES {
         out[i].id = i as u32;
@@ -380,7 +407,7 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
     out
 }
 
-const _: () = assert!(std::mem::offset_of!(ShadeSpec, transmits) == 4 * (AXIS_ENTRIES - 1));
+const _: () = assert!(std::mem::offset_of!(ShadeSpec, ibl) == 4 * (AXIS_ENTRIES - 1));
 
 impl crate::vk::SpecConstants for ShadeSpec {
     const ENTRIES: &'static [crate::vk::SpecEntry] = &shade_spec_entries();
@@ -412,6 +439,7 @@ impl VariantKey {
             lights: 0,
             transport: self.transport.code(),
             transmits: 0,
+            ibl: self.ibl.code(),
             values: [[0.0; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
         }
     }
@@ -447,6 +475,9 @@ impl fmt::Display for VariantKey {
         }
         if self.interfaces != Interfaces::Single {
             write!(f, ",interfaces={}", self.interfaces)?;
+        }
+        if self.ibl != Ibl::SplitSum {
+            write!(f, ",ibl={}", self.ibl)?;
         }
         Ok(())
     }
@@ -543,6 +574,7 @@ impl VariantKey {
                 "mode" => key.mode = Mode::parse_value(value)?,
                 "transport" => key.transport = Transport::parse_value(value)?,
                 "interfaces" => key.interfaces = Interfaces::parse_value(value)?,
+                "ibl" => key.ibl = Ibl::parse_value(value)?,
                 _ => {
                     return Err(VariantError::UnknownAxis {
                         key: axis.into(),
@@ -572,19 +604,23 @@ mod tests {
 
     #[test]
     fn the_axes_added_after_the_published_study_print_only_off_their_defaults() {
-        let key: VariantKey = "model=tm2,transport=corrected,interfaces=multiple"
+        let key: VariantKey = "model=tm2,ibl=taps,transport=corrected,interfaces=multiple"
             .parse()
             .unwrap();
         assert!(
             key.to_string()
-                .ends_with(",mode=generic,transport=corrected,interfaces=multiple"),
+                .ends_with(",mode=generic,transport=corrected,interfaces=multiple,ibl=taps"),
             "{key}"
         );
+        assert_eq!(key.to_string().parse::<VariantKey>().unwrap(), key);
+        let split: VariantKey = "model=tm2,ibl=split-sum".parse().unwrap();
+        assert!(split.to_string().ends_with(",mode=generic"), "{split}");
         let paper: VariantKey = "model=tm2,transport=paper".parse().unwrap();
         assert!(paper.to_string().ends_with(",mode=generic"), "{paper}");
         for (text, allowed) in [
             ("transport=fixed", "paper, corrected"),
             ("interfaces=double", "single, multiple"),
+            ("ibl=exact", "split-sum, matched, taps"),
         ] {
             let e = text.parse::<VariantKey>().unwrap_err().to_string();
             assert!(e.contains(allowed), "{e}");
@@ -619,6 +655,7 @@ mod tests {
                                                 mode,
                                                 transport,
                                                 interfaces,
+                                                ibl: Ibl::VALUES[keys.len() % Ibl::VALUES.len()].1,
                                             });
                                         }
                                     }

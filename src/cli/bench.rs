@@ -124,30 +124,7 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
         count(&gpu, &env_path, &config, args, &mut results)?;
     }
     print!("{}", results.table());
-    for run in &results.runs {
-        if let Some(e) = run.image_error {
-            let mut parts = Vec::new();
-            if let Some(f) = run.reference_flip_floor {
-                parts.push(format!("noise floor {f:.4}"));
-            }
-            if let (Some(l), Some(m)) = (run.lighting_error, run.model_error) {
-                parts.push(format!("lighting {:.4}, model {:.4}", l.flip, m.flip));
-            }
-            let floor = if parts.is_empty() {
-                String::new()
-            } else {
-                format!(" ({})", parts.join("; "))
-            };
-            println!(
-                "image error: FLIP {:.4}{floor}, RMSE {:.2e}, max relative {:.1} %  {} | {}",
-                e.flip,
-                e.rmse,
-                100.0 * e.max_relative,
-                run.variant,
-                run.material
-            );
-        }
-    }
+    print_image_errors(&results);
     if let Some(path) = &args.json {
         imageio::write_file_atomically(path, serde_json::to_string_pretty(&results)?)?;
         println!("wrote {}", path.display());
@@ -221,4 +198,32 @@ fn count(
     results.record_counts(info, &counts[0]);
     bar.finish_and_clear();
     Ok(())
+}
+
+/// Each measured run's image error, its noise floor and its parts.
+fn print_image_errors(results: &Results) {
+    for run in &results.runs {
+        if let Some(e) = run.image_error {
+            let mut parts = Vec::new();
+            if let Some(f) = run.reference_flip_floor {
+                parts.push(format!("noise floor {f:.4}"));
+            }
+            if let (Some(l), Some(m)) = (run.lighting_error, run.model_error) {
+                parts.push(format!("lighting {:.4}, model {:.4}", l.flip, m.flip));
+            }
+            let floor = if parts.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", parts.join("; "))
+            };
+            println!(
+                "image error: FLIP {:.4}{floor}, RMSE {:.2e}, max relative {:.1} %  {} | {}",
+                e.flip,
+                e.rmse,
+                100.0 * e.max_relative,
+                run.variant,
+                run.material
+            );
+        }
+    }
 }

@@ -209,6 +209,19 @@ fn run_reference(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
     let (w, h) = (image.width as usize, image.height as usize);
     imageio::write_exr_rgba32f(&args.out, w, h, &image.pixels)?;
     imageio::write_png_tonemapped(&args.png, w, h, &image.pixels, args.exposure)?;
+    print_reference(&gpu, &env_path, &stack, &image, args);
+    Ok(())
+}
+
+/// What `--reference` rendered and wrote.
+fn print_reference(
+    gpu: &lamina::Gpu,
+    env_path: &std::path::Path,
+    stack: &Stack,
+    image: &reference::ReferenceImage,
+    args: &RenderArgs,
+) {
+    let (width, height) = (image.width, image.height);
     println!(
         "device:      {} ({})",
         gpu.device.report.name, gpu.device.report.driver_info
@@ -230,5 +243,4 @@ fn run_reference(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
         args.out.display(),
         args.png.display()
     );
-    Ok(())
 }

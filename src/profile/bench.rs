@@ -194,6 +194,7 @@ fn results(gpu: &Gpu, config: &BenchConfig, timings: Vec<CaseTiming>) -> Results
         scene: config.scene,
         counter: None,
         lighting: (config.lighting != Lighting::default()).then(|| config.lighting.to_toml()),
+        environment: None,
         calibration: None,
         runs,
     }

@@ -15,7 +15,7 @@ use crate::render::reference::{self, Convergence, ReferenceImage};
 use crate::render::scene::Scene;
 use crate::render::{PassCache, Renderer, TargetFormat};
 use crate::tables::environment::EnvDesc;
-use crate::variant::{Model, VariantKey};
+use crate::variant::{Ibl, Model, VariantKey};
 
 use super::bench::{place_scene, BenchConfig};
 use super::results::{CaseImageError, ImageError};
@@ -128,18 +128,14 @@ pub fn measure(
             spp,
             seed,
         };
-        if references.find(&key).is_none() {
-            let (image, floor) = reference_with_floor(&mut renderer, &key, &never)?;
-            references.images.push((key.clone(), image, floor));
-        }
-        if references.find_lobes(&key, case.variant).is_none() {
-            let image = own_lobes(&mut renderer, &key, case.variant, &never)?;
-            references.lobes.push((key.clone(), case.variant, image));
-        }
+        // The lobes do not depend on how the environment lights them.
+        let lobes = VariantKey {
+            ibl: Ibl::SplitSum,
+            ..case.variant
+        };
+        references.render_missing(&mut renderer, &key, lobes, &never)?;
         let (image, floor) = references.find(&key).expect("rendered above");
-        let own = references
-            .find_lobes(&key, case.variant)
-            .expect("rendered above");
+        let own = references.find_lobes(&key, lobes).expect("rendered above");
         let pass = passes.get(&mut renderer, &case.pass_key(&config.lighting)?)?;
         let frame = renderer.render(pass, &layers, width, height)?;
         let (error, map) = compare(&frame.pixels, &image.pixels, width, height);
@@ -261,6 +257,26 @@ impl References {
             .iter()
             .find(|(k, ..)| k == key)
             .map(|(_, i, floor)| (i, *floor))
+    }
+
+    /// Renders the exact model's reference of `key` (with its floor) and that of `lobes`'s
+    /// own lobes, where not rendered yet.
+    fn render_missing(
+        &mut self,
+        renderer: &mut Renderer<'_>,
+        key: &ReferenceKey,
+        lobes: VariantKey,
+        never: &AtomicBool,
+    ) -> Result<()> {
+        if self.find(key).is_none() {
+            let (image, floor) = reference_with_floor(renderer, key, never)?;
+            self.images.push((key.clone(), image, floor));
+        }
+        if self.find_lobes(key, lobes).is_none() {
+            let image = own_lobes(renderer, key, lobes, never)?;
+            self.lobes.push((key.clone(), lobes, image));
+        }
+        Ok(())
     }
 
     fn find_lobes(&self, key: &ReferenceKey, variant: VariantKey) -> Option<&ReferenceImage> {

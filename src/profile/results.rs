@@ -170,6 +170,10 @@ pub struct Results {
     /// every result before lights.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lighting: Option<String>,
+    /// The environment map's file name where a study names its own (a sweep file's `env`);
+    /// absent: the run's `--env`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub environment: Option<String>,
     /// The device's calibration pair (`profile::calibrate`), measured by a sweep on a GPU so
     /// that its report says what a fragment timing stands for there; absent on lavapipe.
     #[serde(default, skip_serializing_if = "Option::is_none")]

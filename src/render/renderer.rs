@@ -19,7 +19,7 @@ use crate::shader::interface::{
     material_buffer, FrameConstants, SCENE_BINDINGS, SCENE_SET, SHADING_SET,
 };
 use crate::tables::environment::{EnvDesc, Environment};
-use crate::variant::{Mode, Model, Transport, VariantKey};
+use crate::variant::{Ibl, Mode, Model, Transport, VariantKey};
 use crate::vk::{
     submit_and_wait, texel_bytes, Access, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
     DescriptorSetLayout, Format, GpuProfiler, Image, ImageDesc, ImageState, ImageView,
@@ -203,7 +203,12 @@ impl<'g> Renderer<'g> {
 
     /// Replaces the environment (prefiltered from `equirect` per `env`).
     pub fn set_environment(&mut self, equirect: &HdrImage, env: EnvDesc) -> Result<()> {
+        let matched = self.environment.matched_view().is_some();
         self.environment = Environment::build(self.gpu, equirect, env)?;
+        // The passes prepared so far may read the matched cube.
+        if matched {
+            self.environment.build_matched(self.gpu)?;
+        }
         Ok(())
     }
 
@@ -252,6 +257,9 @@ impl<'g> Renderer<'g> {
     pub fn prepare_baked(&mut self, key: &PassKey, baked_size: u32) -> Result<ForwardPass> {
         let variant = key.variant;
         self.inputs.prepare(variant)?;
+        if variant.ibl != Ibl::SplitSum {
+            self.environment.build_matched(self.gpu)?;
+        }
         let baked = match (variant.mode, key.layers()) {
             (Mode::Baked, Some(layers)) => {
                 let evaluator = baked::evaluator_for(self.gpu, variant, layers.len())?;
@@ -542,12 +550,26 @@ impl<'g> Renderer<'g> {
             self.surface_texture().map(|t| &t.view),
             "shading",
         )?;
+        let matched = match self.environment.matched_view() {
+            Some(view) => view,
+            None if pass.key.variant.ibl == Ibl::SplitSum => &self.environment.view,
+            None => {
+                return Err(Error::Unsupported(format!(
+                    "the pass of {} reads the matched environment cube, which this renderer \
+                     has not built: prepare the pass with this renderer",
+                    pass.key.variant
+                )))
+            }
+        };
         let mut scene = DescriptorSet::new(device, &self.scene_layout, "scene")?;
         scene
             .write(0, Resource::Buffer(&uniforms))
             .write(1, Resource::Sampled(&self.environment.view, &self.sampler))
             .write(2, Resource::Buffer(&lights))
-            .write(3, Resource::Buffer(&self.environment.sampling));
+            .write(3, Resource::Buffer(&self.environment.sampling))
+            // A pass whose `ibl` reads the matched cube built it when it was prepared; any
+            // other never reads the binding, which holds the Karis cube until then.
+            .write(4, Resource::Sampled(matched, &self.sampler));
         Ok(FrameSets {
             shading,
             scene,

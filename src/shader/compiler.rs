@@ -171,7 +171,7 @@ fn layer_values_glsl() -> String {
 }
 
 fn codes_glsl() -> String {
-    use crate::variant::{Axis, Fgd, Mode, Model, Ndf, Tir, Transport, G2};
+    use crate::variant::{Axis, Fgd, Ibl, Mode, Model, Ndf, Tir, Transport, G2};
     fn axis<A: Axis>(out: &mut String) {
         for &(spelling, value) in A::VALUES {
             let name = format!("{}_{}", A::NAME, spelling)
@@ -193,7 +193,9 @@ fn codes_glsl() -> String {
     axis::<Ndf>(&mut out);
     axis::<Mode>(&mut out);
     axis::<Transport>(&mut out);
+    axis::<Ibl>(&mut out);
     for (name, value) in [
+        ("IBL_TAP_COUNT", crate::variant::IBL_TAP_COUNT),
         ("TM6_LOBES_PER_LAYER", crate::model::TM6_LOBES_PER_LAYER),
         ("TM6_LOBES_LESS", crate::model::TM6_LOBES_LESS),
     ] {

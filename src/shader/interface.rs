@@ -317,7 +317,7 @@ pub fn material_buffer(
 pub const SCENE_SET: u32 = 1;
 
 /// The scene set's bindings, as `glsl/include/bindings/scene.glsl` declares them.
-pub const SCENE_BINDINGS: [Binding; 4] = [
+pub const SCENE_BINDINGS: [Binding; 5] = [
     Binding {
         binding: 0,
         kind: BindingKind::UniformBuffer,
@@ -337,6 +337,11 @@ pub const SCENE_BINDINGS: [Binding; 4] = [
         binding: 3,
         kind: BindingKind::StorageBuffer,
         name: "EnvironmentSampling",
+    },
+    Binding {
+        binding: 4,
+        kind: BindingKind::SampledImage,
+        name: "matched",
     },
 ];
 

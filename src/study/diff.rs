@@ -365,6 +365,7 @@ mod tests {
                 scene: crate::render::scene::Scene::FullScreen,
                 counter: None,
                 lighting: None,
+                environment: None,
                 calibration: None,
                 runs,
             },

@@ -165,6 +165,7 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
         source_text,
         scene: measuring.scene,
         lighting: measuring.lighting,
+        env: environment(file, sweep)?,
         width: measuring.size.width,
         height: measuring.size.height,
         frames: measuring.frames,
@@ -261,6 +262,25 @@ fn measuring(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Measuri
 }
 
 /// The suite's `lights`, else the study's, relative to the file that names them.
+/// `env`, relative to the study's file; an error names the file when it is not there.
+fn environment(file: &Path, sweep: &SweepFile) -> Result<Option<PathBuf>> {
+    let Some(env) = &sweep.env else {
+        return Ok(None);
+    };
+    let path = file.parent().unwrap_or(Path::new(".")).join(env);
+    if !path.is_file() {
+        return Err(bad(
+            file,
+            "env",
+            &format!(
+                "`{}` is not a file (an OpenEXR environment map)",
+                path.display()
+            ),
+        ));
+    }
+    Ok(Some(path))
+}
+
 fn lighting(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Lighting> {
     let lights = over
         .lights

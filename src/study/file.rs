@@ -59,6 +59,10 @@ pub struct SweepFile {
     /// A lighting file (relative to this one) or preset (`render::lights`): the environment's
     /// scale and the analytic lights. Absent: the environment alone.
     pub lights: Option<String>,
+    /// An equirectangular OpenEXR environment map (relative to this file) that lights this
+    /// study instead of the suite's (`--env`); its instructions are counted under the suite's,
+    /// which costs the same.
+    pub env: Option<String>,
     pub size: Option<String>,
     pub frames: Option<u32>,
     pub warmup: Option<u32>,

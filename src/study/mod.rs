@@ -40,6 +40,8 @@ pub struct Study {
     pub source_text: String,
     pub scene: Scene,
     pub lighting: Lighting,
+    /// `env`: the environment map that lights this study instead of the suite's.
+    pub env: Option<PathBuf>,
     pub width: u32,
     pub height: u32,
     pub frames: u32,

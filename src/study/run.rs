@@ -363,13 +363,19 @@ fn time_all(
             study,
         });
         let started = Instant::now();
-        timed.push(time(
-            run.gpu,
-            run.equirect,
-            study,
-            &mut references,
-            &mut |what, done, total| on(Event::Progress { what, done, total }),
-        )?);
+        let mut progress = |what: &str, done, total| on(Event::Progress { what, done, total });
+        timed.push(match &study.env {
+            // Its own environment, and its own references.
+            Some(path) => {
+                let equirect = crate::imageio::read_exr(path)
+                    .map_err(|e| Error::Unsupported(format!("study `{}`: env: {e}", study.name)))?;
+                let mut own = References::default();
+                let mut t = time(run.gpu, &equirect, study, &mut own, &mut progress)?;
+                t.results.environment = path.file_name().map(|n| n.to_string_lossy().into_owned());
+                t
+            }
+            None => time(run.gpu, run.equirect, study, &mut references, &mut progress)?,
+        });
         check_validation(run.gpu)?;
         on(Event::Timed {
             study,

@@ -5,7 +5,13 @@
 //! 2. The prefiltered cube copies the source's mip 0 (α = 0 is a mirror) and fills mip m ≥ 1
 //!    with `prefilter.comp.glsl` at α = (m / (M − 1))², the mapping `lib/ibl.glsl` reads back.
 //!    The filter importance-samples D and reads the source mip matching each sample's solid
-//!    angle, so a few dozen samples give a smooth lobe.
+//!    angle, so a few dozen samples give a smooth lobe. It weighs its samples by n·l and reads
+//!    a source mip one level blurrier than their solid angle, as Karis 2013 does.
+//! 3. The matched cube ([`Weighting::Matched`], which `ibl=matched` and `ibl=taps` read) is
+//!    built the same way the first time a pass needs it, from the source cube kept for it, but
+//!    weighs each sample by the lobe's own G2 at normal view (the BRDF times the cosine over
+//!    D's pdf), reads the source mip of its solid angle, and takes [`MATCHED_SAMPLES`] times
+//!    the samples.
 
 use std::f64::consts::PI;
 
@@ -56,6 +62,8 @@ struct PrefilterPush {
     source_size: u32,
     destination_size: u32,
     sample_count: u32,
+    /// 1: [`Weighting::Matched`].
+    matched: u32,
 }
 
 /// `equirect_to_cube.comp.glsl`: one invocation per texel of a cube face, z the face.
@@ -76,18 +84,37 @@ pub const PREFILTER_KERNEL: KernelInterface = KernelInterface {
         alpha,
         source_size,
         destination_size,
-        sample_count
+        sample_count,
+        matched
     }),
     local_size: [LOCAL_SIZE_2D, LOCAL_SIZE_2D],
 };
+
+/// How a prefiltered cube weighs its samples (`prefilter.comp.glsl`'s `matched`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Weighting {
+    /// n·l, and a source mip one level blurrier than a sample's solid angle (Karis 2013).
+    Karis,
+    /// G2(l, n), the lobe's own, and the source mip of a sample's solid angle.
+    Matched,
+}
+
+/// The matched cube's samples per texel, as a multiple of [`EnvDesc::samples`].
+pub const MATCHED_SAMPLES: u32 = 4;
 
 /// Largest finite half float: brighter texels (a bare sun) are clamped to it on upload.
 const HALF_MAX: f32 = 65504.0;
 
 pub struct Environment {
-    /// RGBA16F cube, `desc.mip_count` mips, in `FragmentRead` state.
+    /// RGBA16F cube, `desc.mip_count` mips, in `FragmentRead` state: [`Weighting::Karis`].
     pub cube: Image,
     pub view: ImageView,
+    /// The same, [`Weighting::Matched`], once [`Environment::build_matched`] built it.
+    matched: Option<(Image, ImageView)>,
+    /// The source cube (every mip, `ComputeRead`), kept for the matched cube.
+    source: Image,
+    source_view: ImageView,
+    cube_sampler: Sampler,
     pub desc: EnvDesc,
     /// The irradiance's order-2 spherical harmonics ([`irradiance_sh`]), which the forward
     /// pass lights a diffuse base with.
@@ -112,7 +139,7 @@ impl Environment {
         let equirect_sampler = Sampler::new(device, SamplerDesc::equirect(), "equirect")?;
         let cube_sampler = Sampler::new(device, SamplerDesc::linear_clamp(), "cube source")?;
 
-        let (source, cube) = cubes(gpu, desc)?;
+        let source = source_cube(gpu, desc)?;
         let source_view = source.view("environment source cube")?;
         let source_mip0 = source.mip_view(0, "environment source mip 0")?;
         let convert = ComputeKernel::build(gpu, &CONVERT_KERNEL, &[], &[], KernelSpec::default())?;
@@ -120,19 +147,7 @@ impl Environment {
         convert_set
             .write(0, Resource::Sampled(&source_2d_view, &equirect_sampler))
             .write(1, Resource::Storage(&source_mip0));
-
-        let prefilter =
-            ComputeKernel::build(gpu, &PREFILTER_KERNEL, &[], &[], KernelSpec::default())?;
-        let mut targets = Vec::new();
-        for mip in 1..desc.mip_count {
-            let view = cube.mip_view(mip, &format!("prefiltered mip {mip}"))?;
-            let mut set = DescriptorSet::new(device, &prefilter.set_layout, "prefilter")?;
-            set.write(0, Resource::Sampled(&source_view, &cube_sampler))
-                .write(1, Resource::Storage(&view));
-            targets.push((mip, view, set));
-        }
-
-        submit_and_wait(device, "environment", |rec| {
+        submit_and_wait(device, "environment source", |rec| {
             rec.begin_label("equirect to cube");
             rec.transition(
                 &source,
@@ -146,18 +161,23 @@ impl Environment {
                 &ConvertPush { face_size: size },
                 [size, size, 6],
             );
-            record_mip_chain(rec, &source, &cube);
-            rec.end_label();
-            rec.begin_label("GGX prefilter");
-            record_prefilter(rec, &prefilter, &targets, &cube, desc);
+            record_mip_chain(rec, &source);
             rec.end_label();
             Ok(())
         })?;
-
-        let view = cube.view("environment prefiltered cube")?;
+        let (cube, view) = prefiltered_cube(
+            gpu,
+            (&source, &source_view, &cube_sampler),
+            desc,
+            Weighting::Karis,
+        )?;
         Ok(Self {
             cube,
             view,
+            matched: None,
+            source,
+            source_view,
+            cube_sampler,
             desc,
             irradiance: irradiance_sh(equirect),
             sampling: Buffer::with_data(
@@ -169,11 +189,38 @@ impl Environment {
         })
     }
 
-    /// Reads mip `mip` back as RGBA f32 texels, face-major (faces in Vulkan order), rows top to
-    /// bottom.
-    pub fn read_mip(&self, gpu: &Gpu, mip: u32) -> Result<Vec<[f32; 4]>> {
-        let bytes =
-            crate::vk::read_image_mip(&gpu.device, &self.cube, mip, ImageState::FragmentRead)?;
+    /// Builds the matched cube ([`Weighting::Matched`]) unless built.
+    pub fn build_matched(&mut self, gpu: &Gpu) -> Result<()> {
+        if self.matched.is_none() {
+            self.matched = Some(prefiltered_cube(
+                gpu,
+                (&self.source, &self.source_view, &self.cube_sampler),
+                self.desc,
+                Weighting::Matched,
+            )?);
+        }
+        Ok(())
+    }
+
+    /// The matched cube's view, once built.
+    pub fn matched_view(&self) -> Option<&ImageView> {
+        self.matched.as_ref().map(|(_, view)| view)
+    }
+
+    /// Reads mip `mip` of the cube of `weighting` back as RGBA f32 texels, face-major (faces in
+    /// Vulkan order), rows top to bottom; the matched cube must have been built.
+    pub fn read_mip(&self, gpu: &Gpu, weighting: Weighting, mip: u32) -> Result<Vec<[f32; 4]>> {
+        let cube = match weighting {
+            Weighting::Karis => &self.cube,
+            Weighting::Matched => {
+                &self
+                    .matched
+                    .as_ref()
+                    .ok_or_else(|| Error::Unsupported("the matched cube is not built".into()))?
+                    .0
+            }
+        };
+        let bytes = crate::vk::read_image_mip(&gpu.device, cube, mip, ImageState::FragmentRead)?;
         let halves: &[f16] = bytemuck::cast_slice(&bytes);
         Ok(halves
             .chunks_exact(4)
@@ -182,25 +229,79 @@ impl Environment {
     }
 }
 
-/// The source cube (every mip, mip 0 converted from the map, the others blitted down) and the
-/// prefiltered cube (`desc.mip_count` mips) of a `desc.face_size` environment.
-fn cubes(gpu: &Gpu, desc: EnvDesc) -> Result<(Image, Image)> {
-    let usage = ImageUsageFlags::STORAGE
+fn cube_usage() -> ImageUsageFlags {
+    ImageUsageFlags::STORAGE
         | ImageUsageFlags::SAMPLED
         | ImageUsageFlags::TRANSFER_SRC
-        | ImageUsageFlags::TRANSFER_DST;
-    let cube = |mips: Option<u32>, name: &str| {
-        let desc = ImageDesc::new_cube(Format::R16G16B16A16_SFLOAT, desc.face_size);
-        let desc = match mips {
-            Some(n) => desc.mips(n),
-            None => desc.all_mips(),
-        };
-        Image::new(&gpu.device, desc.usage(usage), name)
+        | ImageUsageFlags::TRANSFER_DST
+}
+
+/// The source cube of a `desc.face_size` environment: every mip, mip 0 converted from the
+/// map, the others blitted down.
+fn source_cube(gpu: &Gpu, desc: EnvDesc) -> Result<Image> {
+    let image = ImageDesc::new_cube(Format::R16G16B16A16_SFLOAT, desc.face_size).all_mips();
+    Ok(Image::new(
+        &gpu.device,
+        image.usage(cube_usage()),
+        "environment source cube",
+    )?)
+}
+
+/// A prefiltered cube of `desc.mip_count` mips from the source cube (in `ComputeRead`, with
+/// its view and sampler), its samples weighed by `weighting`: mip 0 a copy of the source's,
+/// mips ≥ 1 the GGX prefilter. Left in `FragmentRead`, the source back in `ComputeRead`.
+fn prefiltered_cube(
+    gpu: &Gpu,
+    (source, source_view, sampler): (&Image, &ImageView, &Sampler),
+    desc: EnvDesc,
+    weighting: Weighting,
+) -> Result<(Image, ImageView)> {
+    let device = &gpu.device;
+    let name = match weighting {
+        Weighting::Karis => "environment prefiltered cube",
+        Weighting::Matched => "environment matched cube",
     };
-    Ok((
-        cube(None, "environment source cube")?,
-        cube(Some(desc.mip_count), "environment prefiltered cube")?,
-    ))
+    let image = ImageDesc::new_cube(Format::R16G16B16A16_SFLOAT, desc.face_size)
+        .mips(desc.mip_count)
+        .usage(cube_usage());
+    let cube = Image::new(device, image, name)?;
+    let prefilter = ComputeKernel::build(gpu, &PREFILTER_KERNEL, &[], &[], KernelSpec::default())?;
+    let mut targets = Vec::new();
+    for mip in 1..desc.mip_count {
+        let view = cube.mip_view(mip, &format!("{name} mip {mip}"))?;
+        let mut set = DescriptorSet::new(device, &prefilter.set_layout, "prefilter")?;
+        set.write(0, Resource::Sampled(source_view, sampler))
+            .write(1, Resource::Storage(&view));
+        targets.push((mip, view, set));
+    }
+    submit_and_wait(device, name, |rec| {
+        rec.begin_label("GGX prefilter");
+        rec.transition(
+            source,
+            0..1,
+            ImageState::ComputeRead,
+            ImageState::TransferSrc,
+        );
+        rec.transition(&cube, 0..1, ImageState::Undefined, ImageState::TransferDst);
+        rec.copy_mip0(source, &cube);
+        rec.transition(
+            &cube,
+            0..1,
+            ImageState::TransferDst,
+            ImageState::FragmentRead,
+        );
+        rec.transition(
+            source,
+            0..1,
+            ImageState::TransferSrc,
+            ImageState::ComputeRead,
+        );
+        record_prefilter(rec, &prefilter, &targets, &cube, desc, weighting);
+        rec.end_label();
+        Ok(())
+    })?;
+    let view = cube.view(name)?;
+    Ok((cube, view))
 }
 
 /// The equirectangular map as a half-float 2-D image the conversion samples.
@@ -232,8 +333,8 @@ fn upload_equirect(gpu: &Gpu, equirect: &HdrImage) -> Result<(Image, ImageView)>
 }
 
 /// Records the source cube's mip chain (each mip blitted from the one above, after mip 0 was
-/// written by the conversion) and the copy of its mip 0 into the prefiltered cube.
-fn record_mip_chain(rec: &mut Recorder, source: &Image, cube: &Image) {
+/// written by the conversion), leaving every mip in `ComputeRead`.
+fn record_mip_chain(rec: &mut Recorder, source: &Image) {
     let source_levels = source.desc.mip_levels;
     rec.transition(
         source,
@@ -256,14 +357,6 @@ fn record_mip_chain(rec: &mut Recorder, source: &Image, cube: &Image) {
             ImageState::TransferSrc,
         );
     }
-    rec.transition(cube, 0..1, ImageState::Undefined, ImageState::TransferDst);
-    rec.copy_mip0(source, cube);
-    rec.transition(
-        cube,
-        0..1,
-        ImageState::TransferDst,
-        ImageState::FragmentRead,
-    );
     rec.transition(
         source,
         0..source_levels,
@@ -280,6 +373,7 @@ fn record_prefilter(
     targets: &[(u32, ImageView, DescriptorSet)],
     cube: &Image,
     desc: EnvDesc,
+    weighting: Weighting,
 ) {
     let mips = 1..desc.mip_count;
     rec.transition(
@@ -298,7 +392,11 @@ fn record_prefilter(
                 alpha: r * r,
                 source_size: desc.face_size,
                 destination_size: w,
-                sample_count: desc.samples,
+                sample_count: match weighting {
+                    Weighting::Karis => desc.samples,
+                    Weighting::Matched => MATCHED_SAMPLES * desc.samples,
+                },
+                matched: u32::from(weighting == Weighting::Matched),
             },
             [w, w, 6],
         );

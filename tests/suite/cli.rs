@@ -552,7 +552,7 @@ fn bench_counts_instructions_per_shaded_pixel() {
     let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
     assert!(csv.lines().next().unwrap().ends_with(
         "instructions_per_pixel,instructions_per_pixel_ratio,flip,rmse,max_relative_error,\
-             flip_vs_fp32"
+             flip_vs_fp32,flip_floor,flip_lighting,flip_model"
     ));
 }
 

@@ -3,7 +3,7 @@
 use crate::common;
 
 use glam::DVec3;
-use lamina::tables::environment::{self, EnvDesc, Environment};
+use lamina::tables::environment::{self, EnvDesc, Environment, Weighting};
 use lamina::tables::split_sum::{self, SplitSumTable};
 use lamina::variant::G2;
 
@@ -20,9 +20,9 @@ fn prefiltered_mip0_matches_source_and_mips_get_smoother() {
         mip_count: 6,
         samples: 64,
     };
-    let env = Environment::build(&gpu, &studio, desc).unwrap();
+    let mut env = Environment::build(&gpu, &studio, desc).unwrap();
 
-    let mip0 = env.read_mip(&gpu, 0).unwrap();
+    let mip0 = env.read_mip(&gpu, Weighting::Karis, 0).unwrap();
     let n = desc.face_size;
     // Per-texel bound, in units of the spread of the four texels a bilinear lookup blends:
     // the sampler's fixed-point weights (subTexelPrecisionBits) move the blend by up to
@@ -75,21 +75,72 @@ fn prefiltered_mip0_matches_source_and_mips_get_smoother() {
     );
     assert!(mean < 2e-3, "mean relative error {mean}");
 
-    let mut variances = Vec::new();
-    for mip in 0..desc.mip_count {
-        let texels = env.read_mip(&gpu, mip).unwrap();
-        let lum: Vec<f64> = texels.iter().map(|&t| luminance(t)).collect();
-        let mean = lum.iter().sum::<f64>() / lum.len() as f64;
-        let var = lum.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / lum.len() as f64;
-        println!("mip {mip}: mean luminance {mean:.4}, variance {var:.6}");
-        variances.push(var);
+    // Both cubes: mip 0 the source's, every mip smoother than the one above; the matched
+    // cube's mips below the first differ from Karis's (their weights do).
+    env.build_matched(&gpu).unwrap();
+    for weighting in [Weighting::Karis, Weighting::Matched] {
+        let mut variances = Vec::new();
+        for mip in 0..desc.mip_count {
+            let texels = env.read_mip(&gpu, weighting, mip).unwrap();
+            let karis = env.read_mip(&gpu, Weighting::Karis, mip).unwrap();
+            assert_eq!(
+                texels == karis,
+                mip == 0 || weighting == Weighting::Karis,
+                "{weighting:?} mip {mip}"
+            );
+            let lum: Vec<f64> = texels.iter().map(|&t| luminance(t)).collect();
+            let mean = lum.iter().sum::<f64>() / lum.len() as f64;
+            let var = lum.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / lum.len() as f64;
+            println!("{weighting:?} mip {mip}: mean luminance {mean:.4}, variance {var:.6}");
+            variances.push(var);
+        }
+        for (m, pair) in variances.windows(2).enumerate() {
+            assert!(
+                pair[1] < pair[0],
+                "{weighting:?}: mip {} is not smoother than mip {m}",
+                m + 1
+            );
+        }
     }
-    for (m, pair) in variances.windows(2).enumerate() {
-        assert!(
-            pair[1] < pair[0],
-            "mip {} is not smoother than mip {m}",
-            m + 1
-        );
+    common::assert_validation_clean(&gpu);
+}
+
+/// One step of a half float relative to a value in [0.5, 1), the most a cube's texel may be
+/// off: an image store may convert to half rounding towards zero (Vulkan's conversion rules
+/// allow it; lavapipe does), so a weighted mean of equal values an f32 rounding below them
+/// is stored a whole step below.
+const HALF_STEP: f64 = 1.0 / 1024.0;
+
+/// A uniform environment prefilters to itself, within the cubes' half-float step, in every
+/// texel of every mip of both cubes.
+#[test]
+fn a_uniform_environment_prefilters_to_itself_in_both_cubes() {
+    let gpu = common::gpu();
+    let uniform = lamina::imageio::HdrImage {
+        width: 64,
+        height: 32,
+        pixels: vec![[0.75, 0.75, 0.75, 1.0]; 64 * 32],
+    };
+    let desc = EnvDesc {
+        face_size: 32,
+        mip_count: 5,
+        samples: 16,
+    };
+    let mut env = Environment::build(&gpu, &uniform, desc).unwrap();
+    env.build_matched(&gpu).unwrap();
+    for weighting in [Weighting::Karis, Weighting::Matched] {
+        for mip in 0..desc.mip_count {
+            let texels = env.read_mip(&gpu, weighting, mip).unwrap();
+            let off = texels
+                .iter()
+                .flat_map(|t| &t[..3])
+                .map(|&c| (f64::from(c) - 0.75).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                off <= HALF_STEP * 0.75,
+                "{weighting:?} mip {mip}: a texel {off:e} off"
+            );
+        }
     }
     common::assert_validation_clean(&gpu);
 }

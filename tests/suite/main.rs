@@ -12,6 +12,7 @@ mod environment;
 mod export;
 mod fgd;
 mod gates;
+mod ibl;
 mod lights;
 mod model_gpu;
 mod model_vs_cpu;

@@ -656,3 +656,46 @@ fn a_pinned_lavapipe_run_builds_its_tables_first_on_every_core() {
         .collect();
     assert!(tables.iter().any(|t| t.starts_with("tir")), "{tables:?}");
 }
+
+/// A study's own `env`: it lights that study (recorded in its results and report), relative
+/// to its file; a missing map is refused naming the file and the field.
+#[test]
+fn a_study_is_lit_by_its_own_environment() {
+    let dir = common::scratch_dir("sweep-env");
+    std::fs::copy(
+        common::repo_path("assets/env/white.exr"),
+        dir.join("white.exr"),
+    )
+    .unwrap();
+    let study = |env: &str| {
+        format!(
+            "name = \"lit\"\nmaterials = [\"gold\"]\nbase = \"model=tm2\"\nsize = \"16x16\"\n\
+             frames = 1\nwarmup = 0\nreference_spp = 16\nenv = \"{env}\"\n\
+             [[axis]]\nname = \"ibl\"\nvalues = [\"split-sum\", \"matched\"]\n"
+        )
+    };
+    std::fs::write(dir.join("lit.toml"), study("white.exr")).unwrap();
+    let out = lamina(&["--validation", "sweep", "lit.toml", "--out", "res"], &dir);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let results: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("res/results.json")).unwrap())
+            .unwrap();
+    assert_eq!(results["environment"], "white.exr");
+    // Under the white environment both cubes are uniform: the two values' images are one, and
+    // their lighting parts too.
+    let runs = results["runs"].as_array().unwrap();
+    let lighting = |i: usize| runs[i]["lighting_error"]["flip"].as_f64().unwrap();
+    assert_eq!(runs.len(), 3);
+    assert!((lighting(1) - lighting(2)).abs() < 1e-3, "{runs:?}");
+    let md = std::fs::read_to_string(dir.join("res/REPORT.md")).unwrap();
+    assert!(md.contains("Environment: `white.exr`"), "{md}");
+
+    std::fs::write(dir.join("lit.toml"), study("missing.exr")).unwrap();
+    let out = lamina(&["sweep", "lit.toml", "--out", "bad"], &dir);
+    assert!(!out.status.success());
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.contains("lit.toml") && stderr.contains("env") && stderr.contains("missing.exr"),
+        "{stderr}"
+    );
+}

@@ -23,5 +23,8 @@ layout(set = 1, binding = 3, std430) readonly buffer EnvironmentSampling {
     uvec4 env_sampling_info;  // x, y: the grid
     float env_cdf[];
 };
+// The environment prefiltered with the lobe's own weighting (tables::environment's matched
+// cube), which `ibl=matched` and `ibl=taps` read; a pass of another `ibl` never reads it.
+layout(set = 1, binding = 4) uniform samplerCube matched;
 
 #endif

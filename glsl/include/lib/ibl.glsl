@@ -16,6 +16,24 @@ float ibl_mip_of_alpha(float alpha, float mip_count) {
     return sqrt(clamp(alpha, 0.0, 1.0)) * (mip_count - 1.0);
 }
 
+// A lobe of α at most the models' smallest (a smooth layer's, HG_MIN_ALPHA) is a mirror to
+// the lighting: one fetch of the cubes' shared mip 0, whatever the `ibl` value.
+const float IBL_MIN_ALPHA = HG_MIN_ALPHA;
+
+// GGX D and Smith's Λ in single precision whatever the model's precision (the lighting's
+// arithmetic is not the fp16 axis's): D peaks at 1/(πα²), beyond half floats below α ≈ 2e-3.
+float ibl_ggx_d(float cos_h, float alpha) {
+    float a2 = alpha * alpha;
+    float d = cos_h * cos_h * (a2 - 1.0) + 1.0;
+    return a2 / (PI * d * d);
+}
+
+float ibl_lambda(float cos_t, float alpha) {
+    float c = max(cos_t, 1e-6);
+    float c2 = c * c;
+    return (sqrt(c2 + alpha * alpha * (1.0 - c2)) - c) / (2.0 * c);
+}
+
 // Off-specular dominant direction (Lagarde & de Rousiers 2014, simple form):
 // lerp(N, R, (1 − α)(√(1 − α) + α)). Not normalised: a cube lookup divides by the major axis
 // anyway, and the lerp of two unit vectors with N·R ≥ 0 (R is the view's mirror about N, or

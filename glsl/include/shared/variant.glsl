@@ -45,6 +45,9 @@ layout(constant_id = 21) const uint TRANSPORT = 0;
 // 1: the stack may end in a dielectric (neither a conductor nor a diffuse base) and transmits:
 // the forward pass shades what it transmits from behind the surface; 0 folds that code away.
 layout(constant_id = 22) const uint TRANSMITS = 0;
+// IBL_SPLIT_SUM, IBL_MATCHED or IBL_TAPS: how the environment lights each lobe
+// (lib/ibl.glsl, forward.frag.glsl's lobe_radiance).
+layout(constant_id = 23) const uint IBL = 0;
 
 // The codes of every axis value (MODEL_TM2, TIR_LUT32, FGD_RESAMPLED4D, G2_EARL, …), written
 // from the Rust value tables by src/shader/compiler.rs.

@@ -230,6 +230,12 @@ fn study_header(md: &mut String, s: &StudyDir, out_dir: &Path) {
         relative(&s.dir, out_dir),
     );
     let _ = writeln!(md, "Command: `{}`\n", r.command);
+    if let Some(env) = &r.environment {
+        let _ = writeln!(
+            md,
+            "Environment: `{env}` (the study's own, its sweep file's `env`).\n"
+        );
+    }
     if let Some(c) = &r.calibration {
         let _ = writeln!(
             md,

@@ -83,6 +83,7 @@ fn the_reading_names_agreement_rebuilds_and_fp16_emulation() {
             scene: crate::render::scene::Scene::Sphere,
             counter: None,
             lighting: None,
+            environment: None,
             calibration: None,
             runs: vec![
                 run(&key("model=ggx"), 1.0, 2_000_000, 8_000_000),
@@ -190,6 +191,7 @@ fn per_pixel_counts_are_the_main_figure() {
                 shaded_pixels: [2304, 9216],
             }),
             lighting: None,
+            environment: None,
             calibration: None,
             runs: vec![
                 counted("model=ggx", 1_000_000, 300.0, 1.0),
@@ -296,6 +298,7 @@ fn targets_pivot_dilution_and_bake_error_are_reported() {
                 shaded_pixels: [300, 1200],
             }),
             lighting: None,
+            environment: None,
             calibration: None,
             runs,
         },
@@ -490,6 +493,7 @@ fn a_study_on_two_devices_gets_a_table_of_both_ratios() {
                 scene: crate::render::scene::Scene::FullScreen,
                 counter: None,
                 lighting: None,
+                environment: None,
                 calibration: None,
                 runs: vec![run(&key("model=ggx"), 1.0, 0, 0), tm2],
             },
