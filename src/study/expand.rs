@@ -144,6 +144,13 @@ fn expand(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Study> {
              layers than `max_layers`",
         ));
     }
+    // What a pass would refuse at run time (a per-material mode on a stack with maps …),
+    // refused now, before any GPU work.
+    for p in &points {
+        p.case
+            .pass_key(&measuring.lighting)
+            .map_err(|e| bad(file, "materials", &format!("`{}`: {e}", p.case.stack.name)))?;
+    }
     check_published(file, sweep)?;
     let targets = sweep
         .targets

@@ -699,3 +699,27 @@ fn a_study_is_lit_by_its_own_environment() {
         "{stderr}"
     );
 }
+
+/// A combination a pass would refuse (a specialized pipeline for a stack with maps) is refused
+/// when the file is read, naming the file, the field and the material: before any GPU work.
+#[test]
+fn a_study_a_pass_would_refuse_is_refused_before_it_runs() {
+    let dir = common::scratch_dir("sweep-refused");
+    std::fs::write(
+        dir.join("maps.toml"),
+        "name = \"maps\"\nmaterials = [\"gold\", \"worn-lacquered-copper\"]\n\
+         base = \"mode=specialized\"\n[[axis]]\nname = \"ibl\"\nvalues = [\"split-sum\"]\n",
+    )
+    .unwrap();
+    let out = lamina(&["sweep", "maps.toml", "--dry-run"], &dir);
+    assert!(!out.status.success());
+    let stderr = text(&out.stderr);
+    for part in [
+        "maps.toml",
+        "materials",
+        "worn lacquered copper",
+        "mode=generic",
+    ] {
+        assert!(stderr.contains(part), "`{part}` missing from {stderr}");
+    }
+}
