@@ -11,7 +11,7 @@ use crate::material::simplify::simplify;
 use crate::material::{presets, Stack};
 use crate::model::LayerParams;
 use crate::render::scene::Camera;
-use crate::variant::{Axis, Fgd, Mode, Model, Ndf, Tir, VariantKey, G2};
+use crate::variant::{Axis, Fgd, Ibl, Mode, Model, Ndf, Tir, VariantKey, G2};
 
 use super::layer_edit::{
     coverage_editor, coverage_of, coverage_value, describe, layer_editor, rgb_row, CoverageEdit,
@@ -306,6 +306,8 @@ impl Panels {
         // generic: one pipeline for every stack; specialized: rebuilt when an edit changes
         // the stack's structure; specialized-values and baked: rebuilt on every edit.
         choose(ui, "mode", &mut v.mode, Mode::VALUES);
+        // How the environment lights each lobe (matched and taps build a second cube once).
+        choose(ui, "ibl", &mut v.ibl, Ibl::VALUES);
         if self.requested != before {
             self.stack.model = stack_model(self.requested.model, self.stack.model);
             self.message = None;
