@@ -89,8 +89,10 @@ pub fn compare(
 /// Renders each uniform material's reference image (`config`'s scene, size and lighting, `spp`
 /// samples per lobe, from `seed`) and one frame of each case of `config`'s plan, in float
 /// targets, and measures each case's image error — beside the reference's noise floor, the
-/// FLIP between it and the same reference from the next seed — and, for a half-precision
-/// case, its error against its single-precision twin: one [`CaseImageError`] per case, in plan
+/// FLIP between it and the same reference from the next seed, and in two parts: lighting,
+/// against the reference of the case's own lobes ([`own_lobes`]), and model, that reference
+/// against the exact model's — and, for a half-precision case, its error against its
+/// single-precision twin: one [`CaseImageError`] per case, in plan
 /// order, and the error maps by case ([`error_map_path`]). Cases of a stack that varies over
 /// the surface get none (the reference renders uniform stacks).
 pub fn measure(
