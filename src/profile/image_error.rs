@@ -90,7 +90,7 @@ pub fn compare(
 /// samples per lobe, from `seed`) and one frame of each case of `config`'s plan, in float
 /// targets, and measures each case's image error — beside the reference's noise floor, the
 /// FLIP between it and the same reference from the next seed, and in two parts: lighting,
-/// against the reference of the case's own lobes ([`own_lobes`]), and model, that reference
+/// against the reference of the case's own lobes ([`reference_image`]), and model, that reference
 /// against the exact model's — and, for a half-precision case, its error against its
 /// single-precision twin: one [`CaseImageError`] per case, in plan
 /// order, and the error maps by case ([`error_map_path`]). Cases of a stack that varies over
@@ -180,52 +180,36 @@ fn reference_with_floor(
     never: &AtomicBool,
 ) -> Result<(ReferenceImage, f64)> {
     let (width, height) = key.size;
-    let mut render = |seed| {
-        let convergence = Convergence {
-            spp: key.spp,
-            noise: None,
-            seed,
-        };
-        reference::render(
-            renderer,
-            key.model,
-            &key.layers,
-            key.size,
-            convergence,
-            &mut |_, _| {},
-            never,
-        )
-        .map(|image| image.expect("an image-error reference is never stopped"))
-    };
+    let mut render = |seed| reference_image(renderer, key, None, seed, never);
     let image = render(key.seed)?;
     let other = render(key.seed.wrapping_add(1))?;
     let floor = compare(&other.pixels, &image.pixels, width, height).0.flip;
     Ok((image, floor))
 }
 
-/// The reference image of `variant`'s own lobes (`reference::render_variant`) of `key`'s
-/// stack, scene and samples — the same seed as the exact model's reference, so that the two
-/// share their samples and the model part compares lobes, not noise.
-fn own_lobes(
+/// The reference image of `key`'s stack, scene and samples from `seed`: of the exact model's
+/// lobes, or with `own` of that variant's own lobes (`reference::render_variant`), which the
+/// image error renders from the exact reference's seed so that the two share their samples and
+/// the model part compares lobes, not noise.
+fn reference_image(
     renderer: &mut Renderer<'_>,
     key: &ReferenceKey,
-    variant: VariantKey,
+    own: Option<VariantKey>,
+    seed: u64,
     never: &AtomicBool,
 ) -> Result<ReferenceImage> {
     let convergence = Convergence {
         spp: key.spp,
         noise: None,
-        seed: key.seed,
+        seed,
     };
-    reference::render_variant(
-        renderer,
-        variant,
-        &key.layers,
-        key.size,
-        convergence,
-        &mut |_, _| {},
-        never,
-    )
+    let (layers, size, quiet) = (&key.layers, key.size, &mut |_, _| {});
+    match own {
+        None => reference::render(renderer, key.model, layers, size, convergence, quiet, never),
+        Some(variant) => {
+            reference::render_variant(renderer, variant, layers, size, convergence, quiet, never)
+        }
+    }
     .map(|image| image.expect("an image-error reference is never stopped"))
 }
 
@@ -249,7 +233,7 @@ struct ReferenceKey {
 #[derive(Default)]
 pub struct References {
     images: Vec<(ReferenceKey, ReferenceImage, f64)>,
-    /// The references of variants' own lobes ([`own_lobes`]).
+    /// The references of variants' own lobes ([`reference_image`]).
     lobes: Vec<(ReferenceKey, VariantKey, ReferenceImage)>,
 }
 
@@ -275,7 +259,7 @@ impl References {
             self.images.push((key.clone(), image, floor));
         }
         if self.find_lobes(key, lobes).is_none() {
-            let image = own_lobes(renderer, key, lobes, never)?;
+            let image = reference_image(renderer, key, Some(lobes), key.seed, never)?;
             self.lobes.push((key.clone(), lobes, image));
         }
         Ok(())
