@@ -16,6 +16,7 @@ cd "$root"
 packages=(
   mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers vulkan-tools
   libshaderc-dev glslang-dev spirv-tools
+  librenderdoc python3-renderdoc renderdoccmd
   cmake ninja-build python3 git g++ valgrind
   xvfb xauth libxkbcommon-x11-0 libx11-xcb1 libxcursor1 libxrandr2 libxi6
 )

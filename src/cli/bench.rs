@@ -6,18 +6,20 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use lamina::imageio::{self, HdrImage};
 use lamina::material::Stack;
-use lamina::profile::bench::{self, BenchConfig};
+use lamina::profile::bench::{self, BenchConfig, CaseDraw};
 use lamina::profile::counter::{self, CounterSetup, CounterSizes};
 use lamina::profile::image_error::{self, References};
 use lamina::profile::plan::{Case, Plan};
 use lamina::profile::results::Results;
 use lamina::render::reference;
 use lamina::render::scene::Scene;
+use lamina::vk::Capturer;
 use lamina::{Gpu, Size};
 
 use super::args::{CounterArg, EnvArg};
 use super::{
-    asset_path, check_validation, follow, print_pipelines, progress_bar, save_pipelines, GlobalArgs,
+    asset_path, check_validation, follow, load_capturer, print_pipelines, progress_bar,
+    save_pipelines, GlobalArgs,
 };
 
 #[derive(clap::Args)]
@@ -75,6 +77,11 @@ pub struct BenchArgs {
     /// whatever its size cancels; the whole-draw count is the smaller size's.
     #[arg(long, default_value = "48x48,96x96", value_name = "WxH,WxH")]
     counter_sizes: CounterSizes,
+    /// Record one frame of the first `--variant` (after the timing, after its own warm-up
+    /// frames) with RenderDoc into this file, for RenderDoc's UI, renderdoccmd or its Python
+    /// module; needs RenderDoc's library (Debian: librenderdoc).
+    #[arg(long, value_name = "FILE.rdc")]
+    capture: Option<PathBuf>,
 }
 
 pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
@@ -94,6 +101,7 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
             })
         })
         .collect::<Result<Vec<_>>>()?;
+    let capturer = load_capturer(args.capture.as_deref())?;
     let mut gpu = global.open_gpu()?;
     let config = BenchConfig {
         plan: Plan::new(cases),
@@ -133,6 +141,16 @@ pub fn run(global: &GlobalArgs, args: &BenchArgs) -> Result<()> {
         imageio::write_file_atomically(path, results.csv())?;
         println!("wrote {}", path.display());
     }
+    if let (Some(capturer), Some(file)) = (capturer, &args.capture) {
+        let case = &config.plan.cases()[config.plan.added_baselines()];
+        capture(&gpu, &equirect, &config, case, capturer, file)?;
+        println!(
+            "capture: {} ({} | {})",
+            file.display(),
+            case.variant,
+            case.stack.name
+        );
+    }
     save_pipelines(&gpu);
     Ok(())
 }
@@ -171,6 +189,24 @@ fn image_errors(
         println!("wrote {} error map(s) under {}", maps.len(), dir.display());
     }
     Ok(())
+}
+
+/// One frame of `case` recorded with RenderDoc into `file`, after `config.warmup` frames
+/// (the first compiles the shader on lavapipe).
+fn capture(
+    gpu: &Gpu,
+    equirect: &HdrImage,
+    config: &BenchConfig,
+    case: &Case,
+    mut capturer: Capturer,
+    file: &Path,
+) -> Result<()> {
+    let mut draw = CaseDraw::new(gpu, equirect, config, case)?;
+    for _ in 0..config.warmup {
+        draw.render()?;
+    }
+    capturer.capture(&gpu.device, file, || draw.render())??;
+    check_validation(gpu)
 }
 
 /// Each run's instructions (`--counter instructions`), counted under callgrind and recorded

@@ -32,7 +32,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use lamina::vk::{DeviceSelector, InstanceDesc};
+use lamina::vk::{Capturer, DeviceSelector, InstanceDesc};
 use lamina::Gpu;
 
 #[derive(Parser)]
@@ -250,6 +250,21 @@ fn asset_path(path: &Path) -> PathBuf {
         }
     }
     path.to_owned()
+}
+
+/// RenderDoc, loaded when `--capture FILE.rdc` asks for a capture: before the device is
+/// opened, or its layer would not see the device.
+fn load_capturer(file: Option<&Path>) -> Result<Option<Capturer>> {
+    let Some(file) = file else {
+        return Ok(None);
+    };
+    if file.extension().and_then(|e| e.to_str()) != Some("rdc") {
+        anyhow::bail!(
+            "--capture {}: a capture file ends in .rdc (RenderDoc's format)",
+            file.display()
+        );
+    }
+    Ok(Some(Capturer::load()?))
 }
 
 /// `1 study`, `2 studies`.

@@ -15,7 +15,8 @@ use lamina::tables::environment::EnvDesc;
 
 use super::args::{self, SceneArgs, SceneDefaults};
 use super::{
-    asset_path, check_validation, print_pipelines, save_pipelines, stop_on_interrupt, GlobalArgs,
+    asset_path, check_validation, load_capturer, print_pipelines, save_pipelines,
+    stop_on_interrupt, GlobalArgs,
 };
 
 #[derive(clap::Args)]
@@ -55,6 +56,12 @@ pub struct RenderArgs {
     /// estimates of the same image, whose difference is its noise.
     #[arg(long, value_name = "SEED", default_value_t = 0, requires = "reference")]
     seed: u64,
+    /// Record the measured frame (the sky and the shaded draw) with RenderDoc into this file,
+    /// for RenderDoc's UI, renderdoccmd or its Python module; needs RenderDoc's library
+    /// (Debian: librenderdoc). Written whatever the image's checks find: a failing frame is
+    /// what one captures.
+    #[arg(long, value_name = "FILE.rdc", conflicts_with = "reference")]
+    capture: Option<PathBuf>,
 }
 
 pub struct RenderScene;
@@ -76,6 +83,7 @@ pub fn run(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
     let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
     let (stack, variant) = resolve_with_variant(&scene.material, scene.variant.as_deref())?;
     let layers = stack.params();
+    let mut capturer = load_capturer(args.capture.as_deref())?;
     let mut gpu = global.open_gpu()?;
     print_pipelines(&mut gpu, None);
     let mut renderer = Renderer::new(&gpu, &equirect, EnvDesc::default())?;
@@ -93,7 +101,12 @@ pub fn run(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
     for _ in 0..args.warmup {
         renderer.render(&pass, &layers, width, height)?;
     }
-    let frame = renderer.render(&pass, &layers, width, height)?;
+    let frame = match (&mut capturer, &args.capture) {
+        (Some(capturer), Some(file)) => capturer.capture(&gpu.device, file, || {
+            renderer.render(&pass, &layers, width, height)
+        })??,
+        _ => renderer.render(&pass, &layers, width, height)?,
+    };
     if let Some(i) = frame
         .pixels
         .iter()
@@ -144,6 +157,13 @@ pub fn run(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
         args.out.display(),
         args.png.display()
     );
+    if let (Some(capturer), Some(file)) = (&capturer, &args.capture) {
+        println!(
+            "capture:     {} (RenderDoc API {})",
+            file.display(),
+            capturer.version()
+        );
+    }
     save_pipelines(&gpu);
     Ok(())
 }

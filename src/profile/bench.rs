@@ -12,9 +12,10 @@ use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
 use crate::model::LayerParams;
+use crate::render::forward::ForwardPass;
 use crate::render::lights::Lighting;
 use crate::render::scene::Scene;
-use crate::render::{PassCache, Renderer};
+use crate::render::{PassCache, RenderedFrame, Renderer};
 use crate::stats::Summary;
 use crate::tables::environment::EnvDesc;
 use crate::vk::ExecutableStats;
@@ -38,6 +39,44 @@ pub struct BenchConfig {
 pub fn place_scene(renderer: &mut Renderer, scene: Scene, width: u32, height: u32) -> Result<()> {
     let mesh = scene.mesh(&renderer.camera, width, height);
     renderer.set_mesh(&mesh)
+}
+
+/// One case's draw over a bench's scene, ready to render single frames: what a capture
+/// records (`bench --capture`).
+pub struct CaseDraw<'g> {
+    renderer: Renderer<'g>,
+    pass: ForwardPass,
+    layers: Vec<LayerParams>,
+    width: u32,
+    height: u32,
+}
+
+impl<'g> CaseDraw<'g> {
+    pub fn new(
+        gpu: &'g Gpu,
+        equirect: &HdrImage,
+        config: &BenchConfig,
+        case: &Case,
+    ) -> Result<Self> {
+        let mut renderer = Renderer::new(gpu, equirect, EnvDesc::default())?;
+        renderer.lighting = config.lighting.clone();
+        place_scene(&mut renderer, config.scene, config.width, config.height)?;
+        renderer.set_surface(case.stack.surface.as_ref())?;
+        let pass = renderer.prepare(&case.pass_key(&config.lighting)?)?;
+        Ok(Self {
+            renderer,
+            pass,
+            layers: case.stack.params(),
+            width: config.width,
+            height: config.height,
+        })
+    }
+
+    /// One frame, as the bench times it.
+    pub fn render(&mut self) -> Result<RenderedFrame> {
+        self.renderer
+            .render(&self.pass, &self.layers, self.width, self.height)
+    }
 }
 
 /// Runs the bench; `progress(done, total)` is called after every frame.

@@ -24,6 +24,8 @@ pub enum VkError {
     Unsupported(String),
     #[error("no Vulkan device matches `{wanted}`; available: {available}")]
     NoSuchDevice { wanted: String, available: String },
+    #[error("capture: {0}")]
+    Capture(String),
     #[error("timestamp queries are not available on queue family {0}")]
     NoTimestamps(u32),
 }

@@ -13,6 +13,7 @@
 //! import `ash` themselves.
 
 mod buffer;
+mod capture;
 mod command;
 mod descriptor;
 mod device;
@@ -28,6 +29,7 @@ mod swapchain;
 
 pub use ash::vk::{BufferUsageFlags, Format, ImageUsageFlags};
 pub use buffer::{Buffer, BufferDesc};
+pub use capture::Capturer;
 pub use command::{
     read_image_mip, submit_and_wait, texel_bytes, upload_image, Access, ImageState, Recorder,
 };
