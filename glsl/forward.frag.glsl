@@ -46,12 +46,25 @@ vec3 shade_behind(vec3 n, vec3 d) {
     return d - 2.0 * dot(n, d) * n;
 }
 
-// One fetch of the environment along the dominant direction of a lobe of roughness α around
-// `r`, from the cube `ibl=split-sum` or the others read (`behind`: mirrored).
+// One fetch of the environment for a lobe of roughness α around `r` (`behind`: mirrored):
+// `ibl=split-sum`, Karis's cube along Lagarde's dominant direction at the lobe's own mip; the
+// others, the matched cube along the lobe's mean direction at the mip of its spread
+// (lib/ibl.glsl's ibl_lobe_moments). A mirror lobe reads mip 0 along `r` either way.
 vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
-    vec3 dir = ibl_dominant_direction(n, r, alpha);
+    vec3 dir;
+    float mip;
+    if (alpha <= IBL_MIN_ALPHA) {
+        dir = r;
+        mip = 0.0;
+    } else if (IBL == IBL_SPLIT_SUM) {
+        dir = ibl_dominant_direction(n, r, alpha);
+        mip = ibl_mip_of_alpha(alpha, frame.params.x);
+    } else {
+        vec2 moments = ibl_lobe_moments(lobe_moments, dot(n, r), alpha);
+        dir = mix(r, n, moments.x);
+        mip = ibl_mip_of_alpha(moments.y * moments.y, frame.params.x);
+    }
     dir = behind ? shade_behind(n, dir) : dir;
-    float mip = alpha <= IBL_MIN_ALPHA ? 0.0 : ibl_mip_of_alpha(alpha, frame.params.x);
     return IBL == IBL_SPLIT_SUM ? textureLod(prefiltered, dir, mip).rgb
                                 : textureLod(matched, dir, mip).rgb;
 }

@@ -218,9 +218,10 @@ axis!(
         /// One fetch per lobe along its dominant direction from the cube prefiltered as Karis
         /// 2013 does (N = V = R, samples weighted by n·l): the talk's reproduction.
         SplitSum = "split-sum",
-        /// The same one fetch from a cube prefiltered with the lobe's own weighting at normal
+        /// One fetch per lobe from a cube prefiltered with the lobe's own weighting at normal
         /// view (D·G2, the BRDF times the cosine), with more samples and no blur bias
-        /// (`tables::environment`): the split sum's idea with its environment made exact.
+        /// (`tables::environment`), along the lobe's mean direction and at the mip of its
+        /// spread (`tables::lobe_moments`): the lobe matched in its first moment.
         Matched = "matched",
         /// Filtered importance sampling (Křivánek & Colbert 2008): [`IBL_TAP_COUNT`] directions
         /// through the lobe's visible normals, each read from the matched cube at the mip

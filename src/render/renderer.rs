@@ -19,6 +19,7 @@ use crate::shader::interface::{
     material_buffer, FrameConstants, SCENE_BINDINGS, SCENE_SET, SHADING_SET,
 };
 use crate::tables::environment::{EnvDesc, Environment};
+use crate::tables::lobe_moments::LobeMomentsTable;
 use crate::variant::{Ibl, Mode, Model, Transport, VariantKey};
 use crate::vk::{
     submit_and_wait, texel_bytes, Access, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
@@ -75,6 +76,8 @@ pub enum ShadedPhase {
 pub struct Renderer<'g> {
     gpu: &'g Gpu,
     pub environment: Environment,
+    /// Each lobe's mean direction and spread, where `ibl=matched` reads the matched cube.
+    moments: LobeMomentsTable,
     /// Set 0: the stack and the tables of every variant prepared so far.
     pub inputs: ShadingInputs<'g>,
     /// Set 1: frame constants and the prefiltered environment.
@@ -121,6 +124,7 @@ impl<'g> Renderer<'g> {
     ) -> Result<Self> {
         let device = &gpu.device;
         let environment = Environment::build(gpu, equirect, env)?;
+        let moments = LobeMomentsTable::load_or_build(gpu)?;
         let inputs = ShadingInputs::new(gpu)?;
         let scene_layout = DescriptorSetLayout::new(
             device,
@@ -153,6 +157,7 @@ impl<'g> Renderer<'g> {
         Ok(Self {
             gpu,
             environment,
+            moments,
             inputs,
             scene_layout,
             layout,
@@ -569,7 +574,8 @@ impl<'g> Renderer<'g> {
             .write(3, Resource::Buffer(&self.environment.sampling))
             // A pass whose `ibl` reads the matched cube built it when it was prepared; any
             // other never reads the binding, which holds the Karis cube until then.
-            .write(4, Resource::Sampled(matched, &self.sampler));
+            .write(4, Resource::Sampled(matched, &self.sampler))
+            .write(5, Resource::Sampled(&self.moments.view, &self.sampler));
         Ok(FrameSets {
             shading,
             scene,

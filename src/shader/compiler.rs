@@ -212,6 +212,10 @@ fn codes_glsl() -> String {
             "LOBE_ALBEDO_SIZE",
             f64::from(super::interface::LOBE_ALBEDO_SIZE),
         ),
+        (
+            "LOBE_MOMENTS_SIZE",
+            f64::from(super::interface::LOBE_MOMENTS_SIZE),
+        ),
         ("FGD_ETA_MAX", super::interface::FGD_ETA_MAX),
         ("FGD_KAPPA_MAX", super::interface::FGD_KAPPA_MAX),
         ("BELCOUR_CT1", super::interface::BELCOUR_CT1),

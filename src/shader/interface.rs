@@ -162,6 +162,10 @@ pub const FGD_GRID_SIZE: u32 = 64;
 /// (`tables::lobe_albedo`).
 pub const LOBE_ALBEDO_SIZE: u32 = 64;
 
+/// Texels per side of the lobe-moments table `ibl=matched` reads (`LOBE_MOMENTS_SIZE`, read by
+/// `glsl/include/lib/ibl.glsl`). The host builds it at this size (`tables::lobe_moments`).
+pub const LOBE_MOMENTS_SIZE: u32 = 32;
+
 /// The 4-D FGD table's domain in η and κ: [0, 4] each (ALGORITHMS.md §6.1); beyond it,
 /// clamped. `FGD_ETA_MAX` and `FGD_KAPPA_MAX` in `glsl/include/lib/fgd.glsl`.
 pub const FGD_ETA_MAX: f64 = 4.0;
@@ -317,7 +321,7 @@ pub fn material_buffer(
 pub const SCENE_SET: u32 = 1;
 
 /// The scene set's bindings, as `glsl/include/bindings/scene.glsl` declares them.
-pub const SCENE_BINDINGS: [Binding; 5] = [
+pub const SCENE_BINDINGS: [Binding; 6] = [
     Binding {
         binding: 0,
         kind: BindingKind::UniformBuffer,
@@ -342,6 +346,11 @@ pub const SCENE_BINDINGS: [Binding; 5] = [
         binding: 4,
         kind: BindingKind::SampledImage,
         name: "matched",
+    },
+    Binding {
+        binding: 5,
+        kind: BindingKind::SampledImage,
+        name: "lobe_moments",
     },
 ];
 

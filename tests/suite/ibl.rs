@@ -125,3 +125,56 @@ fn an_unknown_ibl_value_is_refused_by_name() {
         "{stderr}"
     );
 }
+
+/// Under the studio environment, on gold (one GGX lobe, where the lighting's error is the
+/// whole error), the lighting's part of FLIP falls from the split sum to `matched` (the cube
+/// prefiltered with the lobe's weights, read along its mean direction at the mip of its
+/// spread) and again to `taps`: the orderings of one run, against one reference.
+#[test]
+fn under_the_studio_the_lighting_error_falls_from_split_sum_to_matched_to_taps() {
+    use lamina::profile::bench::BenchConfig;
+    use lamina::profile::image_error::{self, References};
+    use lamina::profile::plan::{Case, Plan};
+    use lamina::render::scene::Scene;
+
+    let gpu = common::gpu();
+    let stack = Stack::resolve("gold").unwrap();
+    let cases = Ibl::VALUES
+        .iter()
+        .map(|&(_, ibl)| Case {
+            variant: VariantKey {
+                ibl,
+                ..stack.variant(None).unwrap()
+            },
+            stack: stack.clone(),
+        })
+        .collect();
+    let config = BenchConfig {
+        plan: Plan::new(cases),
+        scene: Scene::FullScreen,
+        width: 96,
+        height: 54,
+        frames: 1,
+        warmup: 0,
+        lighting: Lighting::default(),
+    };
+    let (errors, _) = image_error::measure(
+        &gpu,
+        &common::studio(),
+        &config,
+        (256, 0),
+        &mut References::default(),
+        &mut |_, _, _| {},
+    )
+    .unwrap();
+    let skip = config.plan.added_baselines();
+    let lighting: Vec<f64> = errors[skip..]
+        .iter()
+        .map(|e| e.lighting.unwrap().flip)
+        .collect();
+    assert!(
+        lighting[1] < lighting[0] && lighting[2] < lighting[1],
+        "lighting FLIP split-sum, matched, taps: {lighting:?}"
+    );
+    common::assert_validation_clean(&gpu);
+}

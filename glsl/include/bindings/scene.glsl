@@ -26,5 +26,8 @@ layout(set = 1, binding = 3, std430) readonly buffer EnvironmentSampling {
 // The environment prefiltered with the lobe's own weighting (tables::environment's matched
 // cube), which `ibl=matched` and `ibl=taps` read; a pass of another `ibl` never reads it.
 layout(set = 1, binding = 4) uniform samplerCube matched;
+// Each GGX lobe's mean direction and spread over (√μ, √α) (tables::lobe_moments): where and at
+// which mip `ibl=matched` reads the matched cube.
+layout(set = 1, binding = 5) uniform sampler2D lobe_moments;
 
 #endif

@@ -44,6 +44,14 @@ vec3 ibl_dominant_direction(vec3 n, vec3 r, float alpha) {
     return mix(n, r, f);
 }
 
+// A lobe's first moment from tables::lobe_moments (`table`, n×n vertex-centred texels over
+// √μ and √α): x, the weight w with which normalize(mix(R, N, w)) is the mean of its reflected
+// directions; y, √α′ of the normal-view lobe that spreads as much.
+vec2 ibl_lobe_moments(sampler2D table, float n_dot_v, float alpha) {
+    vec2 at = vec2(sqrt(clamp(n_dot_v, 0.0, 1.0)), sqrt(clamp(alpha, 0.0, 1.0)));
+    return textureLod(table, (at * (LOBE_MOMENTS_SIZE - 1.0) + 0.5) / LOBE_MOMENTS_SIZE, 0.0).xy;
+}
+
 // The irradiance E(n) of an environment given by its order-2 spherical-harmonic coefficients,
 // each already times its band's cosine-lobe factor Â_l (π, 2π/3, π/4): Ramamoorthi & Hanrahan,
 // "An Efficient Representation for Irradiance Environment Maps" (2001). The coefficients come

@@ -1,0 +1,264 @@
+//! Where a GGX lobe looks and how wide it is: the table `ibl=matched` reads to place its one
+//! fetch of the matched cube (`tables::environment`, prefiltered with the lobe's own weights at
+//! a normal view).
+//!
+//! At a normal view the lobe the cube was prefiltered with is the lobe itself. Away from it the
+//! lobe leans from the mirror direction R towards the normal N — its reflected directions are
+//! cut by the horizon and weighted by G2/G1 — and spreads differently: at μ = 0.1, α = 0.2 the
+//! mean of its directions is 30° from R. The split sum reads its cube at R bent by Lagarde & de
+//! Rousiers' view-independent lerp (8° there). Here each (μ, α) gets the lobe's own first
+//! moment, the mean m of its reflected directions under the visible-normal distribution with
+//! the height-correlated G2/G1 weight: the fetch goes along m̂ (stored as the weight w of
+//! normalize(mix(R, N, w)), which points there), at the mip of the α′ whose normal-view lobe
+//! has the same resultant length |m| (how concentrated its directions are; the von Mises-Fisher
+//! fit's statistic). One moment matched in direction and one in spread: the fetch is still
+//! isotropic, so what a grazing lobe's anisotropy changes is not matched.
+//!
+//! Texel (i, j) of the n×n RG32F image holds (w, √α′) at √μ = i/(n − 1) and √α = j/(n − 1)
+//! (vertex-centred, [`lobe_albedo`](super::lobe_albedo)'s layout with √μ for μ: the lean
+//! changes fastest at grazing). Built on the CPU over a grid of the visible-normal sampler's
+//! variables ([`mean_direction`]); cached on disk like the other tables.
+
+use glam::DVec3;
+
+use crate::error::Result;
+use crate::gpu::Gpu;
+use crate::model::microfacet::{reflect, sample_vndf, smith_lambda};
+use crate::shader::interface::LOBE_MOMENTS_SIZE;
+use crate::vk::{upload_image, Format, Image, ImageDesc, ImageState, ImageView};
+
+use super::lobe_albedo::MIN_MU;
+use super::{filter_axis, Texels};
+
+/// Texels per side ([`LOBE_MOMENTS_SIZE`], which the shaders read too).
+pub const SIZE: u32 = LOBE_MOMENTS_SIZE;
+
+/// Side of the visible-normal grid each texel's moments are taken over.
+const GRID: u32 = 192;
+
+/// Points of the 1-D quadrature of the normal-view lobe's resultant length.
+const SPREAD_POINTS: u32 = 8192;
+
+/// Samples of the normal-view resultant length, uniform in √α, that α′ is read from.
+const SPREAD_SAMPLES: usize = 256;
+
+/// Bumped when the quadrature or the layout changes, so cached tables are rebuilt.
+const VERSION: u32 = 1;
+
+pub struct LobeMomentsTable {
+    /// R32G32_SFLOAT, in `FragmentRead` state.
+    pub image: Image,
+    pub view: ImageView,
+    pub size: u32,
+    /// Row-major (row = roughness): (w, √α′) per texel.
+    pub texels: Vec<[f32; 2]>,
+}
+
+impl LobeMomentsTable {
+    /// From the disk cache when there, else computed (about a second) and stored.
+    pub fn load_or_build(gpu: &Gpu) -> Result<Self> {
+        let key = crate::cache::Key {
+            kind: "lobe-moments",
+            params: vec![SIZE, GRID],
+            shader_hash: u64::from(VERSION),
+        };
+        let dir = crate::cache::tables_dir();
+        let count = (SIZE * SIZE * 2) as usize;
+        let (flat, _) =
+            crate::cache::load_or_build(dir.as_deref(), &key, count, || Ok(compute(SIZE)))?;
+        let image = Image::new(
+            &gpu.device,
+            ImageDesc::new_2d(Format::R32G32_SFLOAT, SIZE, SIZE),
+            "lobe moments table",
+        )?;
+        upload_image(
+            &gpu.device,
+            &image,
+            bytemuck::cast_slice(&flat),
+            ImageState::FragmentRead,
+        )?;
+        let view = image.view("lobe moments table")?;
+        Ok(Self {
+            image,
+            view,
+            size: SIZE,
+            texels: flat.chunks_exact(2).map(|c| [c[0], c[1]]).collect(),
+        })
+    }
+
+    /// The CPU twin of the shaders' lookup: (w, √α′), bilinear over the vertex-centred texels.
+    pub fn sample(&self, mu: f64, alpha: f64) -> [f64; 2] {
+        let n = self.size as usize;
+        let texel = |i: usize, j: usize, c: usize| f64::from(self.texels[j * n + i][c]);
+        let (i, fx) = filter_axis(mu.clamp(0.0, 1.0).sqrt(), n, Texels::Vertices);
+        let (j, fy) = filter_axis(alpha.clamp(0.0, 1.0).sqrt(), n, Texels::Vertices);
+        let lerp = |a: f64, b: f64, t: f64| a + (b - a) * t;
+        [0, 1].map(|c| {
+            let bottom = lerp(texel(i, j, c), texel(i + 1, j, c), fx);
+            let top = lerp(texel(i, j + 1, c), texel(i + 1, j + 1, c), fx);
+            lerp(bottom, top, fy)
+        })
+    }
+}
+
+/// The lobe's first moment at view cosine `mu`: the mean of its reflected directions
+/// (tangent space, the view in the +x half, so R = (−√(1−μ²), 0, μ)) under the visible
+/// normals, weighted by the height-correlated G2/G1. A product rule over the visible-normal
+/// sampler's two variables, the radial one u₁ = 1 − (1 − s)³ for s on a midpoint grid (weight
+/// 3(1 − s)²): GGX's tail, which sets how far the directions spread, gets the points.
+pub fn mean_direction(mu: f64, alpha: f64) -> DVec3 {
+    let v = DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+    let masked = 1.0 + smith_lambda(mu, alpha);
+    let (mut sum, mut total) = (DVec3::ZERO, 0.0);
+    for a in 0..GRID {
+        let s = (f64::from(a) + 0.5) / f64::from(GRID);
+        let u1 = 1.0 - (1.0 - s).powi(3);
+        let jacobian = 3.0 * (1.0 - s) * (1.0 - s);
+        for b in 0..GRID {
+            let u2 = (f64::from(b) + 0.5) / f64::from(GRID);
+            let l = reflect(v, sample_vndf(v, (u1, u2), alpha));
+            if l.z > 0.0 {
+                let w = jacobian * masked / (masked + smith_lambda(l.z, alpha));
+                sum += w * l;
+                total += w;
+            }
+        }
+    }
+    if total > 0.0 {
+        sum / total
+    } else {
+        DVec3::new(-(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu)
+    }
+}
+
+/// The weight w of normalize(mix(R, N, w)) that points `lean` radians from R towards N, R
+/// at `theta` radians from N.
+fn mix_weight(theta: f64, lean: f64) -> f64 {
+    if theta <= 1e-9 {
+        return 0.0;
+    }
+    let t = lean.min(theta).tan();
+    (t / (theta.sin() + t * (1.0 - theta.cos()))).clamp(0.0, 1.0)
+}
+
+/// The resultant length of the normal-view lobe of roughness α: the mean cosine of its
+/// reflected directions to N, weighted by G2/G1 = 1/(1 + Λ(l)). Visible normals at a normal
+/// view are D(h)·cos θ_h, whose CDF in u gives tan²θ_h = α²u/(1 − u); l makes 2θ_h with N and
+/// falls below the horizon past θ_h = π/4, u = 1/(1 + α²). A midpoint rule in u over [0, that]
+/// is smooth in α, where the 2-D grid's cut at the horizon moves in steps.
+pub fn normal_view_spread(alpha: f64) -> f64 {
+    if alpha <= 0.0 {
+        return 1.0;
+    }
+    let a2 = alpha * alpha;
+    let end = 1.0 / (1.0 + a2);
+    let (mut sum, mut total) = (0.0, 0.0);
+    for k in 0..SPREAD_POINTS {
+        let u = end * (f64::from(k) + 0.5) / f64::from(SPREAD_POINTS);
+        let tan2 = a2 * u / (1.0 - u);
+        let cos_l = (1.0 - tan2) / (1.0 + tan2);
+        let w = 1.0 / (1.0 + smith_lambda(cos_l, alpha));
+        sum += w * cos_l;
+        total += w;
+    }
+    sum / total
+}
+
+/// √α′ whose normal-view lobe has resultant length `c`, read from `spread` (lengths at √α
+/// uniform on [0, 1], decreasing): the ends clamp.
+fn matched_root_alpha(spread: &[f64], c: f64) -> f64 {
+    let n = spread.len();
+    if c >= spread[0] {
+        return 0.0;
+    }
+    for k in 1..n {
+        if c >= spread[k] {
+            let t = (spread[k - 1] - c) / (spread[k - 1] - spread[k]);
+            return (k as f64 - 1.0 + t) / (n - 1) as f64;
+        }
+    }
+    1.0
+}
+
+/// [`normal_view_spread`] at √α uniform on [0, 1].
+fn spread_samples() -> Vec<f64> {
+    (0..SPREAD_SAMPLES)
+        .map(|k| {
+            let r = k as f64 / (SPREAD_SAMPLES - 1) as f64;
+            normal_view_spread(r * r)
+        })
+        .collect()
+}
+
+/// The texels, flat (w, √α′) pairs, rows split between the machine's cores.
+fn compute(size: u32) -> Vec<f32> {
+    use rayon::prelude::*;
+    let spread = spread_samples();
+    (0..size * size)
+        .into_par_iter()
+        .flat_map_iter(|t| {
+            let (i, j) = (t % size, t / size);
+            let root_mu = f64::from(i) / f64::from(size - 1);
+            let mu = (root_mu * root_mu).max(MIN_MU);
+            let root_alpha = f64::from(j) / f64::from(size - 1);
+            if j == 0 {
+                return [0.0, 0.0];
+            }
+            let m = mean_direction(mu, root_alpha * root_alpha);
+            let r = DVec3::new(-(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+            let lean = m.normalize().dot(r).clamp(-1.0, 1.0).acos();
+            let w = mix_weight(mu.acos(), lean);
+            let root = matched_root_alpha(&spread, m.length());
+            [w as f32, root as f32]
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_normal_view_keeps_the_mirror_direction_and_its_own_roughness() {
+        let spread = spread_samples();
+        assert!(spread.windows(2).all(|p| p[1] < p[0]), "{spread:?}");
+        // The 2-D rule's length at a normal view inverts to the α it was taken at.
+        for alpha in [0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0] {
+            let m = mean_direction(1.0, alpha);
+            assert!(m.x.abs() < 1e-9 && m.y.abs() < 1e-9, "{alpha}: {m}");
+            let root = matched_root_alpha(&spread, m.length());
+            assert!((root - alpha.sqrt()).abs() < 2e-4, "{alpha}: √α′ {root}");
+        }
+    }
+
+    #[test]
+    fn a_grazing_lobe_leans_towards_the_normal_and_the_weight_points_there() {
+        // α 0.2 at μ 0.1: the mean direction is about 30° from R, far beyond the split sum's
+        // lerp (8°).
+        let mu: f64 = 0.1;
+        let m = mean_direction(mu, 0.2).normalize();
+        let r = DVec3::new(-(1.0 - mu * mu).sqrt(), 0.0, mu);
+        let lean = m.dot(r).acos().to_degrees();
+        assert!((lean - 30.0).abs() < 1.0, "lean {lean}°");
+        // Lagarde & de Rousiers' lerp(N, R, (1 − α)(√(1 − α) + α)), the split sum's direction.
+        let f = 0.8 * (0.8f64.sqrt() + 0.2);
+        let lagarde = (f * r + (1.0 - f) * DVec3::Z)
+            .normalize()
+            .dot(r)
+            .acos()
+            .to_degrees();
+        assert!((lagarde - 8.0).abs() < 0.5, "Lagarde's lean {lagarde}°");
+        let theta = mu.acos();
+        let w = mix_weight(theta, lean.to_radians());
+        let bent = ((1.0 - w) * r + w * DVec3::Z).normalize();
+        assert!(bent.dot(m) > 1.0 - 1e-9, "w {w}: {bent} against {m}");
+        // Leaning grows as the view grazes.
+        let leans: Vec<f64> = [0.9, 0.5, 0.2, 0.05]
+            .map(|mu: f64| {
+                let r = DVec3::new(-(1.0 - mu * mu).sqrt(), 0.0, mu);
+                mean_direction(mu, 0.2).normalize().dot(r).acos()
+            })
+            .to_vec();
+        assert!(leans.windows(2).all(|p| p[1] > p[0]), "{leans:?}");
+    }
+}
