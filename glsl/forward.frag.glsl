@@ -235,6 +235,11 @@ vec3 shade_baked(vec3 n, vec3 v, float n_dot_v) {
     vec3 sum = vec3(0.0);
     [[unroll]] for (uint k = 0u; k < LOBE_COUNT; ++k) {
         vec4 lobe = textureLod(baked_lobes, vec2(u, (float(k) + 0.5) / float(LOBE_COUNT)), 0.0);
+        // A diffuse base's lobe (.a = −1 at every sample, render/baked.rs): Lambertian.
+        if (DIFFUSE_BASE != 0u && lobe.a < 0.0) {
+            sum += lobe.rgb * diffuse_light();
+            continue;
+        }
         // .a is the perceptual roughness √α, the cube's mip axis.
         float alpha = lobe.a * lobe.a;
         bool retro = tm_bit(RETRO_MASK, k);

@@ -109,7 +109,13 @@ impl BakedTable {
             for e in &evaluations {
                 let lobe = e.evaluation.lobes[k];
                 let w = lobe.weight.map(|w| w as f32);
-                texels.push([w[0], w[1], w[2], lobe.roughness.sqrt() as f32]);
+                // √α = −1 marks a diffuse base's lobe (the pass lights it as Lambertian).
+                let root = if lobe.diffuse {
+                    -1.0
+                } else {
+                    lobe.roughness.sqrt() as f32
+                };
+                texels.push([w[0], w[1], w[2], root]);
             }
         }
         Ok(Self {
@@ -134,11 +140,12 @@ impl BakedTable {
                 let at = (k * size + j) as usize;
                 let (a, b) = (self.texels[at], self.texels[at + 1]);
                 let lerp = |c: usize| f64::from(a[c]) + (f64::from(b[c]) - f64::from(a[c])) * f;
+                // A diffuse base's lobe has √α = −1 at every sample (the evaluator's α 1).
+                let diffuse = a[3] < 0.0;
                 Lobe {
                     weight: [lerp(0), lerp(1), lerp(2)],
-                    roughness: lerp(3) * lerp(3),
-                    // A diffuse base is never baked (specialize.rs refuses it).
-                    diffuse: false,
+                    roughness: if diffuse { 1.0 } else { lerp(3) * lerp(3) },
+                    diffuse,
                 }
             })
             .collect()

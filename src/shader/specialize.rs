@@ -19,8 +19,8 @@ pub enum SpecializeError {
     ConductorAbove { layer: usize },
     #[error("mode=baked holds at most {max} lobes; the stack has {count} (use mode=specialized)")]
     TooManyLobes { count: usize, max: usize },
-    #[error("layer {layer} is a diffuse base; per-material pipelines do not know that layer kind: shade it under mode=generic")]
-    DiffuseBase { layer: usize },
+    #[error("layer {layer} is a diffuse base; mode={mode} pipelines do not know that layer kind: shade it under mode=generic or mode=baked")]
+    DiffuseBase { layer: usize, mode: Mode },
 }
 
 /// A material's structure: what a specialized pipeline knows about it. Masks hold bit `i` for
@@ -63,7 +63,8 @@ impl Structure {
         for (i, layer) in layers.iter().enumerate() {
             let bit = 1u32 << i;
             if layer.is_diffuse() {
-                return Err(SpecializeError::DiffuseBase { layer: i + 1 });
+                // The base: what it sends back is the baked table's diffuse lobe.
+                continue;
             }
             if layer.roughness == 0.0 {
                 s.smooth_mask |= bit;
@@ -145,10 +146,20 @@ pub fn shade_spec(
 impl Structure {
     /// The structure of `layers` for a per-material pipeline of `variant`, whose mode a
     /// layer-count error names.
+    /// Only `mode=baked` takes a diffuse base: its table holds the base's lobe, which the
+    /// specialized code does not emit.
     pub fn for_variant(
         variant: VariantKey,
         layers: &[LayerParams],
     ) -> Result<Self, SpecializeError> {
+        if variant.mode != Mode::Baked {
+            if let Some(i) = layers.iter().position(LayerParams::is_diffuse) {
+                return Err(SpecializeError::DiffuseBase {
+                    layer: i + 1,
+                    mode: variant.mode,
+                });
+            }
+        }
         Self::of(variant.model, layers).map_err(|e| match e {
             SpecializeError::LayerCount { count, .. } => SpecializeError::LayerCount {
                 mode: variant.mode,

@@ -90,3 +90,66 @@ fn a_white_base_under_lossless_coats_returns_the_white_furnace() {
     }
     common::assert_validation_clean(&gpu);
 }
+
+/// `mode=baked` takes a diffuse base (its table holds the base's Lambertian lobe, √α = −1):
+/// every stack here renders as `mode=generic` does, within the table's interpolation between
+/// its samples (`baked::max_lobe_error`, ≤ 1e-3 of R); `mode=specialized` refuses it by name.
+#[test]
+fn baked_diffuse_bases_render_as_generic_and_specialized_refuses_them() {
+    use lamina::profile::bench::place_scene;
+    use lamina::render::lights::Lighting;
+    use lamina::render::scene::Scene;
+    use lamina::render::{PassKey, Renderer, TargetFormat};
+    use lamina::tables::environment::EnvDesc;
+    use lamina::variant::Mode;
+
+    let gpu = common::gpu();
+    let desc = EnvDesc {
+        face_size: 32,
+        mip_count: 5,
+        samples: 16,
+    };
+    let mut renderer =
+        Renderer::with_target(&gpu, &common::studio(), desc, TargetFormat::Float).unwrap();
+    let (w, h) = (32, 32);
+    place_scene(&mut renderer, Scene::FullScreen, w, h).unwrap();
+    let lighting = Lighting::default();
+    let mut worst = 0.0f64;
+    for key in ["model=tm2,max_layers=4", "model=tm6,max_layers=4"] {
+        let generic: VariantKey = key.parse().unwrap();
+        for stack in stacks() {
+            let mut image = |mode: Mode| {
+                let variant = VariantKey { mode, ..generic };
+                let pass = renderer
+                    .prepare(&PassKey::uniform(variant, &stack, &lighting).unwrap())
+                    .unwrap();
+                renderer.render(&pass, &stack, w, h).unwrap().pixels
+            };
+            let (want, got) = (image(Mode::Generic), image(Mode::Baked));
+            let mean =
+                want.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / (3 * want.len()) as f32;
+            for (a, b) in want.iter().zip(&got) {
+                for c in 0..3 {
+                    let d = f64::from((a[c] - b[c]).abs() / a[c].max(0.01 * mean));
+                    worst = worst.max(d);
+                    assert!(d < 2e-3, "{key} {stack:?}: {} against {}", b[c], a[c]);
+                }
+            }
+            let specialized = VariantKey {
+                mode: Mode::Specialized,
+                ..generic
+            };
+            let e = PassKey::uniform(specialized, &stack, &lighting)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("diffuse base")
+                    && e.contains("mode=specialized")
+                    && e.contains("mode=baked"),
+                "{e}"
+            );
+        }
+    }
+    println!("baked against generic, diffuse bases: largest relative difference {worst:.1e}");
+    common::assert_validation_clean(&gpu);
+}

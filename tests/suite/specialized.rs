@@ -183,9 +183,6 @@ fn baked_lobes_follow_the_model_between_samples() {
     for path in presets() {
         let stack = Stack::load(&path).unwrap();
         let layers = stack.params();
-        if layers.iter().any(LayerParams::is_diffuse) {
-            continue; // mode=baked refuses a diffuse base (shader::specialize)
-        }
         let variant = VariantKey {
             model: stack.model,
             ..VariantKey::default()
