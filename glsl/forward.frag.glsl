@@ -242,8 +242,10 @@ vec3 shade_baked(vec3 n, vec3 v, float n_dot_v) {
         }
         // .a is the perceptual roughness √α, the cube's mip axis.
         float alpha = lobe.a * lobe.a;
-        bool retro = tm_bit(RETRO_MASK, k);
-        sum += lobe.rgb * lobe_light(retro ? v : mirror, alpha, retro, false);
+        // A thin slab's last row is its transmitted lobe, lit from behind (transmitted_light).
+        bool behind = TRANSMITS != 0u && k + 1u == LOBE_COUNT;
+        bool retro = !behind && tm_bit(RETRO_MASK, k);
+        sum += lobe.rgb * lobe_light(retro ? v : mirror, alpha, retro, behind);
     }
     return sum;
 }

@@ -16,7 +16,7 @@
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::imageio::HdrImage;
-use crate::model::{Evaluation, LayerParams, Lobe};
+use crate::model::{ends_transmissive, Evaluation, LayerParams, Lobe};
 use crate::shader::specialize::{BakedShape, MAX_BAKED_LOBES};
 use crate::tables::environment::EnvDesc;
 use crate::variant::{Mode, VariantKey, MAX_LAYERS_LIMIT};
@@ -51,7 +51,8 @@ pub struct BakedTable {
     /// `[lobe][sample]`: (weight RGB, √α). The perceptual roughness √α is what the pass needs
     /// (the prefiltered cube's mip is linear in it) and what it interpolates.
     pub texels: Vec<[f32; 4]>,
-    /// The model's index of each kept lobe.
+    /// The model's index of each kept lobe; a thin slab's table has one row more, its
+    /// transmitted lobe (weight T, the transmitted roughness), last.
     pub kept: Vec<usize>,
 }
 
@@ -93,14 +94,16 @@ impl BakedTable {
                     .any(|e| e.evaluation.lobes[k].weight.iter().any(|&w| w > 0.0))
             })
             .collect();
-        if kept.len() > MAX_BAKED_LOBES {
+        // A thin slab's transmitted lobe is the last row (the pass lights it from behind).
+        let transmits = ends_transmissive(layers);
+        let rows = kept.len() + usize::from(transmits);
+        if rows > MAX_BAKED_LOBES {
             return Err(Error::Unsupported(format!(
-                "mode=baked holds at most {MAX_BAKED_LOBES} lobes; the stack has {} (use \
-                 mode=specialized)",
-                kept.len()
+                "mode=baked holds at most {MAX_BAKED_LOBES} lobes; the stack has {rows} (the \
+                 transmitted one included; use mode=specialized)"
             )));
         }
-        let mut texels = Vec::with_capacity(kept.len() * size as usize);
+        let mut texels = Vec::with_capacity(rows * size as usize);
         let mut retro_mask = 0;
         for (slot, &k) in kept.iter().enumerate() {
             if k < 32 && first.evaluation.retro_mask & (1 << k) != 0 {
@@ -118,9 +121,16 @@ impl BakedTable {
                 texels.push([w[0], w[1], w[2], root]);
             }
         }
+        if transmits {
+            for e in &evaluations {
+                let w = e.evaluation.transmittance.map(|w| w as f32);
+                let root = e.evaluation.transmitted_roughness.sqrt() as f32;
+                texels.push([w[0], w[1], w[2], root]);
+            }
+        }
         Ok(Self {
             shape: BakedShape {
-                lobe_count: kept.len() as u32,
+                lobe_count: rows as u32,
                 retro_mask,
                 size,
             },
@@ -190,10 +200,20 @@ pub fn max_lobe_error(table: &BakedTable, probes: &[f64], exact: &[Evaluation]) 
     let mut worst: f64 = 0.0;
     for (&mu, e) in probes.iter().zip(exact) {
         let baked = table.lobes_at(mu);
-        for (b, &k) in baked.iter().zip(&table.kept) {
-            let m = e.lobes[k];
+        let through = Lobe {
+            weight: e.transmittance,
+            roughness: e.transmitted_roughness,
+            diffuse: false,
+        };
+        let exact = table
+            .kept
+            .iter()
+            .map(|&k| e.lobes[k])
+            .chain((baked.len() > table.kept.len()).then_some(through));
+        for (b, m) in baked.iter().zip(exact) {
             for c in 0..3 {
-                let r = e.reflectance[c].max(1e-3);
+                // Relative to what the stack sends back and through.
+                let r = (e.reflectance[c] + e.transmittance[c]).max(1e-3);
                 let share = m.weight[c].max(0.0) / r;
                 let roughness = (b.roughness.sqrt() - m.roughness.sqrt()).abs();
                 worst = worst

@@ -79,13 +79,6 @@ impl PassKey {
                      pixel"
                 )));
             }
-            if variant.mode == Mode::Baked && ends_transmissive(layers) {
-                return Err(Error::Unsupported(format!(
-                    "variant {variant}: this stack ends in a dielectric and transmits; \
-                     mode=baked tabulates reflected lobes only and cannot render what it \
-                     transmits (use mode=specialized or mode=generic)"
-                )));
-            }
             let structure =
                 Structure::for_variant(variant, layers).map_err(|e| specialize(variant, e))?;
             if variant.mode == Mode::Specialized {
