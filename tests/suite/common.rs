@@ -147,3 +147,18 @@ pub fn check_csv(csv: &str, runs: &[serde_json::Value]) {
         assert_eq!(median, run["median_ms"].as_f64().unwrap());
     }
 }
+
+/// The largest difference of image `b` from image `a` over pixels and RGB, relative to `a`'s
+/// value, values below `floor` counting as `floor`.
+pub fn largest_relative(a: &[[f32; 4]], b: &[[f32; 4]], floor: f32) -> f64 {
+    a.iter()
+        .zip(b)
+        .flat_map(|(p, q)| (0..3).map(move |c| (p[c], q[c])))
+        .map(|(p, q)| f64::from((p - q).abs()) / f64::from(p.abs().max(floor)))
+        .fold(0.0, f64::max)
+}
+
+/// The mean over pixels and RGB of an image.
+pub fn mean_radiance(image: &[[f32; 4]]) -> f32 {
+    image.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / (3 * image.len()) as f32
+}

@@ -59,15 +59,6 @@ fn images(renderer: &mut Renderer<'_>, stack: &Stack, size: u32) -> Vec<Vec<[f32
         .collect()
 }
 
-/// The largest difference of `b` from `a` relative to `a`'s pixel (channels above 1e-6).
-fn largest_relative(a: &[[f32; 4]], b: &[[f32; 4]]) -> f64 {
-    a.iter()
-        .zip(b)
-        .flat_map(|(p, q)| (0..3).map(move |c| (p[c], q[c])))
-        .map(|(p, q)| f64::from((p - q).abs()) / f64::from(p.abs().max(1e-6)))
-        .fold(0.0, f64::max)
-}
-
 #[test]
 fn a_uniform_environment_gives_every_ibl_value_the_split_sums_image() {
     let gpu = common::gpu();
@@ -76,7 +67,7 @@ fn a_uniform_environment_gives_every_ibl_value_the_split_sums_image() {
         let stack = Stack::load(&path).unwrap();
         let images = images(&mut renderer, &stack, 24);
         for (&(name, _), image) in Ibl::VALUES.iter().zip(&images).skip(1) {
-            let d = largest_relative(&images[0], image);
+            let d = common::largest_relative(&images[0], image, 1e-6);
             println!("{}: ibl={name} within {d:.1e} of the split sum", stack.name);
             // The two cubes are half floats, each texel within a half-float step of the
             // environment (tests/suite/environment.rs): their images, within two.
@@ -105,7 +96,7 @@ fn a_mirror_lobe_is_lit_alike_by_every_ibl_value_and_a_rough_one_is_not() {
     }
     let rough = images(&mut renderer, &stack(0.2), 32);
     for (&(name, _), image) in Ibl::VALUES.iter().zip(&rough).skip(1) {
-        let d = largest_relative(&rough[0], image);
+        let d = common::largest_relative(&rough[0], image, 1e-6);
         assert!(
             d > 1e-2,
             "ibl={name} within {d:.1e} of the split sum on rough gold"
