@@ -27,11 +27,14 @@ use super::oracle::evaluate_model;
 use super::{Evaluation, Fgd, LayerParams, Tir};
 use crate::variant::{Interfaces, Model};
 
-/// View cosines at which a material's ratios are tabulated: k/(POINTS − 1), the first at
-/// [`LOWEST`].
+/// View cosines at which a material's ratios are tabulated: k/(POINTS − 1). The transport
+/// is computed at [`point`]`(k)`; the curve's first point is the ratio's linear extension to
+/// μ = 0 (μ = 0 is no view at all) through its values at [`LOWEST`] and 1/(POINTS − 1), so the
+/// curve is linear between evenly spaced cosines and a shader finds its interval with one
+/// multiply (`glsl/include/lib/tm_common.glsl`'s `tm_transport_at`).
 pub const POINTS: usize = 16;
 
-/// The lowest tabulated view cosine (μ = 0 is no view at all).
+/// The lowest view cosine the transport is computed at.
 pub const LOWEST: f64 = 0.01;
 
 /// Largest ratio a layer takes, a guard: layers the paper gives almost nothing are grouped
@@ -40,7 +43,7 @@ pub const LOWEST: f64 = 0.01;
 /// that raised such a layer's energy would carry the ratio anywhere.
 pub const MAX_RATIO: f64 = 64.0;
 
-/// The tabulated cosine of point k.
+/// The view cosine the transport is computed at for point k.
 pub fn point(k: usize) -> f64 {
     (k as f64 / (POINTS - 1) as f64).max(LOWEST)
 }
@@ -144,6 +147,9 @@ impl Correction {
             }
             transmittance[k] = std::array::from_fn(|c| ratio(t[c], paper.transmittance[c]));
         }
+        for curve in per_layer.iter_mut().chain([&mut transmittance]) {
+            extend_to_zero(curve);
+        }
         Self {
             layers: per_layer,
             transmittance,
@@ -181,13 +187,22 @@ impl Correction {
     }
 }
 
-/// A tabulated curve at `mu`, linear between the points, constant beyond the ends.
+/// Replaces point 0 (computed at [`LOWEST`]) by the line through it and point 1, taken to
+/// μ = 0 and kept within the ratios' range.
+fn extend_to_zero(curve: &mut [[f64; 3]; POINTS]) {
+    let step = point(1) - LOWEST;
+    let next = curve[1];
+    for (v, upper) in curve[0].iter_mut().zip(next) {
+        let slope = (upper - *v) / step;
+        *v = (*v - slope * LOWEST).clamp(0.0, MAX_RATIO);
+    }
+}
+
+/// A tabulated curve at `mu` (clamped to [0, 1]), linear between the evenly spaced points.
 fn interpolate(curve: &[[f64; 3]; POINTS], mu: f64) -> [f64; 3] {
-    let x = (mu.clamp(0.0, 1.0) * (POINTS - 1) as f64).min((POINTS - 1) as f64);
+    let x = mu.clamp(0.0, 1.0) * (POINTS - 1) as f64;
     let k = (x as usize).min(POINTS - 2);
-    let lo = point(k);
-    let hi = point(k + 1);
-    let f = ((mu - lo) / (hi - lo)).clamp(0.0, 1.0);
+    let f = x - k as f64;
     std::array::from_fn(|c| curve[k][c] + f * (curve[k + 1][c] - curve[k][c]))
 }
 
@@ -276,10 +291,17 @@ mod tests {
         for (k, v) in curve.iter_mut().enumerate() {
             *v = [point(k); 3];
         }
-        // A ratio linear in μ is reproduced exactly, and held beyond the lowest point.
-        for mu in [0.05, 0.33, 0.5, 0.99, 1.0] {
-            assert!((interpolate(&curve, mu)[0] - mu).abs() < 1e-12);
+        // A ratio linear in μ, computed at the points, is reproduced exactly, below the
+        // lowest computed cosine too.
+        extend_to_zero(&mut curve);
+        for mu in [0.0, 0.001, 0.05, 0.33, 0.5, 0.99, 1.0] {
+            assert!((interpolate(&curve, mu)[0] - mu).abs() < 1e-12, "μ {mu}");
         }
-        assert_eq!(interpolate(&curve, 0.001)[0], LOWEST);
+        // A line that would fall below zero at μ = 0 stops there at 0.
+        let mut steep = [[1.0; 3]; POINTS];
+        steep[0] = [0.0; 3];
+        extend_to_zero(&mut steep);
+        assert_eq!(steep[0], [0.0; 3]);
+        assert!((interpolate(&steep, 1.0 / 15.0)[0] - 1.0).abs() < 1e-12);
     }
 }

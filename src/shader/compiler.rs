@@ -22,6 +22,10 @@ pub const HOST_DEFINES: &[(&str, u32)] = &[
         "LAMINA_TRANSPORT_POINTS",
         crate::model::transport::POINTS as u32,
     ),
+    (
+        "LAMINA_TRANSPORT_OFFSET",
+        super::interface::TRANSPORT_OFFSET as u32,
+    ),
 ];
 
 #[derive(Debug, thiserror::Error)]
@@ -227,7 +231,6 @@ fn codes_glsl() -> String {
         ("TIR_FIT_MIN_SCALE", crate::model::tir::FIT_MIN_SCALE),
         ("TIR_FIT_X_MIN", crate::model::tir::fit_roughness(0.0)),
         ("TIR_FIT_X_MAX", crate::model::tir::fit_roughness(1.0)),
-        ("TRANSPORT_LOWEST", crate::model::transport::LOWEST),
     ] {
         out.push_str(&format!("#define {name} {value:e}\n"));
     }

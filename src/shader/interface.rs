@@ -61,21 +61,43 @@ pub struct MaterialGpu {
     /// Per layer, the maps of its varying fields ([`SurfaceMaps`]'s codes: x: η, κ, σs, σa;
     /// y: α, depth, g, coverage; z: diffuse albedo, a byte each); zeros for a uniform stack.
     pub maps: [[u32; 4]; MAX_LAYERS_LIMIT as usize],
-    /// `transport=corrected`: per layer, then for the transmittance, the energy ratios at
-    /// [`transport::POINTS`] view cosines (rgb; [`Correction`]); 1 (the paper's energies)
-    /// otherwise.
-    pub transport: [[f32; 4]; TRANSPORT_ROWS * transport::POINTS],
+    /// `transport=corrected`: per layer, then for the transmittance, the energy ratios
+    /// ([`Correction`]) over each of the [`TRANSPORT_SEGMENTS`] intervals between the
+    /// tabulated view cosines, as half floats (`packHalf2x16` pairs): x = (r₀, g₀), y = (b₀, Δr),
+    /// z = (Δg, Δb), the ratio at the interval's lower cosine and its change to the upper one
+    /// (w unused); ratio 1 (the paper's energies) otherwise. The shaders read this array
+    /// through a uniform-buffer view of the same buffer (`glsl/include/bindings/shading.glsl`).
+    pub transport: [[u32; 4]; TRANSPORT_ROWS * TRANSPORT_SEGMENTS],
 }
 
 /// Rows of [`MaterialGpu::transport`]: one per layer and the transmittance's.
 pub const TRANSPORT_ROWS: usize = MAX_LAYERS_LIMIT as usize + 1;
 
+/// Intervals per row of [`MaterialGpu::transport`]: between consecutive tabulated cosines.
+pub const TRANSPORT_SEGMENTS: usize = transport::POINTS - 1;
+
+/// Where [`MaterialGpu::transport`] starts in the material's buffer: the uniform-buffer view
+/// declares its array at this offset (`LAMINA_TRANSPORT_OFFSET`).
+pub const TRANSPORT_OFFSET: usize = offset_of!(MaterialGpu, transport);
+
+/// One interval of a ratio curve as the shaders read it (see [`MaterialGpu::transport`]). A
+/// half float's relative step (2⁻¹¹) is far below the model's error; the CPU twins keep f64
+/// ratios, and the GPU meets them within 1e-3 (tests/suite/model_vs_cpu.rs).
+fn transport_segment(lo: [f64; 3], hi: [f64; 3]) -> [u32; 4] {
+    let half = |v: f64| half::f16::from_f64(v).to_bits() as u32;
+    let pair = |a: f64, b: f64| half(a) | (half(b) << 16);
+    let d: [f64; 3] = std::array::from_fn(|c| hi[c] - lo[c]);
+    [pair(lo[0], lo[1]), pair(lo[2], d[0]), pair(d[1], d[2]), 0]
+}
+
 const _: () = assert!(size_of::<LayerGpu>() == 96);
 const _: () = assert!(offset_of!(LayerGpu, params) == 64);
 const _: () = assert!(
     size_of::<MaterialGpu>()
-        == 16 + 112 * MAX_LAYERS_LIMIT as usize + 16 * TRANSPORT_ROWS * transport::POINTS
+        == 16 + 112 * MAX_LAYERS_LIMIT as usize + 16 * TRANSPORT_ROWS * TRANSPORT_SEGMENTS
 );
+// The uniform-buffer view covers the whole buffer: within every device's uniform range.
+const _: () = assert!(size_of::<MaterialGpu>() <= 16384);
 const _: () = assert!(offset_of!(MaterialGpu, layers) == 16);
 const _: () = assert!(offset_of!(MaterialGpu, maps) == 16 + 96 * MAX_LAYERS_LIMIT as usize);
 
@@ -92,7 +114,7 @@ impl MaterialGpu {
             info: [layers.len() as u32, 0, 0, 0],
             layers: [LayerGpu::default(); MAX_LAYERS_LIMIT as usize],
             maps: [[0; 4]; MAX_LAYERS_LIMIT as usize],
-            transport: [[1.0; 4]; TRANSPORT_ROWS * transport::POINTS],
+            transport: [transport_segment([1.0; 3], [1.0; 3]); TRANSPORT_ROWS * TRANSPORT_SEGMENTS],
         };
         for (dst, src) in gpu.layers.iter_mut().zip(layers) {
             *dst = LayerGpu {
@@ -119,9 +141,8 @@ impl MaterialGpu {
             .enumerate()
             .chain([(MAX_LAYERS_LIMIT as usize, &correction.transmittance)]);
         for (row, curve) in rows {
-            for (k, rgb) in curve.iter().enumerate() {
-                self.transport[row * transport::POINTS + k] =
-                    [rgb[0] as f32, rgb[1] as f32, rgb[2] as f32, 0.0];
+            for (k, pair) in curve.windows(2).enumerate() {
+                self.transport[row * TRANSPORT_SEGMENTS + k] = transport_segment(pair[0], pair[1]);
             }
         }
         self
@@ -186,8 +207,13 @@ pub const BELCOUR_CT2: f64 = 432.0 / 999.0;
 /// placeholder for every other pass). Binding 6 holds the white GGX lobe's directional albedo
 /// that the analytic lights normalise each lobe by (`model::light`). Binding 7 holds the maps of
 /// a spatially varying stack (`material::surface`), a 2-D array sampled with repeat; a 1×1
-/// placeholder for uniform stacks.
-pub const SHADING_BINDINGS: [Binding; 8] = [
+/// placeholder for uniform stacks. Binding 8 is the material's buffer again, as a uniform
+/// buffer, through which the shaders read `transport=corrected`'s ratios
+/// ([`MaterialGpu::transport`]): each pixel reads them at its own view cosine, an offset
+/// lavapipe's inliner never takes (it inlines only constant offsets that feed control flow),
+/// and llvmpipe loads a uniform buffer at such offsets in a fraction of a storage buffer's
+/// instructions (README, "A corrected transport": the counts and the command).
+pub const SHADING_BINDINGS: [Binding; 9] = [
     Binding {
         binding: 0,
         kind: BindingKind::StorageBuffer,
@@ -227,6 +253,11 @@ pub const SHADING_BINDINGS: [Binding; 8] = [
         binding: 7,
         kind: BindingKind::SampledImage,
         name: "layer_maps",
+    },
+    Binding {
+        binding: 8,
+        kind: BindingKind::UniformBuffer,
+        name: "Transport",
     },
 ];
 
@@ -293,7 +324,8 @@ impl ShadingLayout {
             .write(
                 7,
                 Resource::Sampled(views.layer_maps.unwrap_or(&self.no_maps.1), &self.repeat),
-            );
+            )
+            .write(8, Resource::Buffer(views.material));
         Ok(set)
     }
 }
@@ -314,7 +346,12 @@ pub fn material_buffer(
     if let Some(correction) = correction {
         material = material.with_transport(correction);
     }
-    Buffer::with_data(device, BufferUsageFlags::STORAGE_BUFFER, &[material], name)
+    Buffer::with_data(
+        device,
+        BufferUsageFlags::STORAGE_BUFFER | BufferUsageFlags::UNIFORM_BUFFER,
+        &[material],
+        name,
+    )
 }
 
 /// The descriptor set index of the scene's own inputs (the forward and sky passes).

@@ -8,8 +8,9 @@
 //!   specialization constants the host sets;
 //! - the graphics entry points declare the shading set (set 0) and the scene set (set 1) as
 //!   `shader::interface` lays them out, and no push constants (their layout has none);
-//! - the std430 Material block and the std140 Frame block have the member offsets and array
-//!   strides of `MaterialGpu`, `LayerGpu` and `FrameConstants`;
+//! - the std430 Material block, the std140 TransportRatios block (the same buffer's energy
+//!   ratios) and the std140 Frame block have the member offsets and array strides of
+//!   `MaterialGpu`, `LayerGpu` and `FrameConstants`;
 //! - every specialization constant a shader declares has an id the host's spec struct sets.
 //!
 //! Each entry is compiled in every define set it is built with (fp16 narrows types).
@@ -22,7 +23,7 @@ use lamina::profile::calibrate;
 use lamina::render::eval;
 use lamina::shader::interface::{
     FrameConstants, LayerGpu, MaterialGpu, SCENE_BINDINGS, SCENE_SET, SHADING_BINDINGS,
-    SHADING_SET, TRANSPORT_ROWS,
+    SHADING_SET, TRANSPORT_OFFSET, TRANSPORT_ROWS, TRANSPORT_SEGMENTS,
 };
 use lamina::shader::kernel::{self, KernelInterface, KernelSpec};
 use lamina::shader::{entry_points, ShaderCompiler};
@@ -528,7 +529,6 @@ fn material_and_frame_blocks_have_the_host_layout() {
                 at(offset_of!(MaterialGpu, info)),
                 at(offset_of!(MaterialGpu, layers)),
                 at(offset_of!(MaterialGpu, maps)),
-                at(offset_of!(MaterialGpu, transport))
             ]
         );
         let (layer, stride, length) = array(&spirv, spirv.members(material)[1].ty);
@@ -549,14 +549,18 @@ fn material_and_frame_blocks_have_the_host_layout() {
             offset_of!(MaterialGpu, transport),
             "map codes"
         );
-        let (_, stride, ratios) = array(&spirv, spirv.members(material)[3].ty);
+        // The energy ratios, through the uniform-buffer view of the same buffer.
+        let ratios_block = spirv.members(spirv.block(SHADING_SET, 8));
+        assert_eq!(ratios_block.len(), 1, "one array of energy ratios");
+        assert_eq!(ratios_block[0].offset, at(TRANSPORT_OFFSET));
+        let (_, stride, ratios) = array(&spirv, ratios_block[0].ty);
         assert_eq!(
             (stride, ratios as usize),
-            (16, TRANSPORT_ROWS * lamina::model::transport::POINTS),
-            "one vec4 of energy ratios per row and view cosine"
+            (16, TRANSPORT_ROWS * TRANSPORT_SEGMENTS),
+            "one uvec4 of energy ratios per row and interval"
         );
         assert_eq!(
-            offset_of!(MaterialGpu, transport) + ratios as usize * 16,
+            TRANSPORT_OFFSET + ratios as usize * 16,
             size_of::<MaterialGpu>(),
             "energy ratios"
         );

@@ -254,10 +254,10 @@ LayerGpu tm_layer(uint i) {
     return material.layers[i];
 }
 
-// transport=corrected: where the view cosine `mu` falls among the tabulated cosines of the
-// material's energy ratios (μ_k = k/(P − 1), the first TRANSPORT_LOWEST): the lower point and
-// the weight of the upper one, held beyond the ends (src/model/transport.rs's `interpolate`).
-// Found once per evaluation; each lobe then reads two points.
+// transport=corrected: where the view cosine `mu` falls among the evenly spaced cosines of
+// the material's energy ratios (μ_k = k/(P − 1)): the interval and the weight of its upper end
+// (src/model/transport.rs's `interpolate`). Found once per evaluation; each lobe then reads
+// its layer's interval.
 struct TmTransportAt {
     uint k;
     float f;
@@ -267,16 +267,18 @@ TmTransportAt tm_transport_at(float mu) {
     const uint P = LAMINA_TRANSPORT_POINTS;
     float x = clamp(mu, 0.0, 1.0) * float(P - 1u);
     uint k = min(uint(x), P - 2u);
-    // Above the first interval the points are evenly spaced: the weight is x − k.
-    float first = (mu - TRANSPORT_LOWEST) / (1.0 / float(P - 1u) - TRANSPORT_LOWEST);
-    return TmTransportAt(k, clamp(k == 0u ? first : x - float(k), 0.0, 1.0));
+    return TmTransportAt(k, x - float(k));
 }
 
 // The ratio of row `row` (a layer of the material, or LAMINA_MAX_LAYERS_LIMIT for the
-// transmittance) at `at`.
+// transmittance) at `at`: one interval's three words (bindings/shading.glsl's
+// TransportRatios), the lower end plus the weighted change.
 vec3 tm_transport_ratio(uint row, TmTransportAt at) {
-    uint base = row * LAMINA_TRANSPORT_POINTS + at.k;
-    return mix(material.transport[base].rgb, material.transport[base + 1u].rgb, at.f);
+    uvec3 packed = transport[row * (LAMINA_TRANSPORT_POINTS - 1u) + at.k].xyz;
+    vec2 rg = unpackHalf2x16(packed.x);
+    vec2 b_dr = unpackHalf2x16(packed.y);
+    vec2 dgb = unpackHalf2x16(packed.z);
+    return vec3(rg, b_dr.x) + vec3(b_dr.y, dgb) * at.f;
 }
 
 // The weight a lobe of layer `i` (of the stack being evaluated) emits: the model's, scaled

@@ -22,10 +22,9 @@ struct MaterialGpu {
     // field, 0 (constant) or 1 + the slice of `layer_maps`, bit 7 set for screen coordinates.
     // x: η, κ, σs, σa; y: α, depth, g, coverage (low byte first). Zeros for a uniform stack.
     uvec4 maps[LAMINA_MAX_LAYERS_LIMIT];
-    // transport=corrected: per layer, then for the transmittance, the ratio of the transport's
-    // energy to the paper model's at LAMINA_TRANSPORT_POINTS view cosines (rgb; μ_k = k/(P − 1),
-    // the first TRANSPORT_LOWEST); 1 otherwise (src/model/transport.rs).
-    vec4 transport[(LAMINA_MAX_LAYERS_LIMIT + 1) * LAMINA_TRANSPORT_POINTS];
+    // Then, at LAMINA_TRANSPORT_OFFSET, transport=corrected's energy ratios, which the shaders
+    // read through a uniform-buffer view of the same buffer (bindings/shading.glsl's
+    // TransportRatios).
 };
 
 #endif
