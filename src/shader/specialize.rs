@@ -19,8 +19,8 @@ pub enum SpecializeError {
     ConductorAbove { layer: usize },
     #[error("mode=baked holds at most {max} lobes; the stack has {count} (use mode=specialized)")]
     TooManyLobes { count: usize, max: usize },
-    #[error("layer {layer} is a diffuse base; mode={mode} pipelines do not know that layer kind: shade it under mode=generic or mode=baked")]
-    DiffuseBase { layer: usize, mode: Mode },
+    #[error("layer {layer} is a diffuse base; mode=specialized-values pipelines hold no diffuse albedo among their constants: shade it under mode=specialized, generic or baked")]
+    DiffuseBase { layer: usize },
 }
 
 /// A material's structure: what a specialized pipeline knows about it. Masks hold bit `i` for
@@ -63,7 +63,8 @@ impl Structure {
         for (i, layer) in layers.iter().enumerate() {
             let bit = 1u32 << i;
             if layer.is_diffuse() {
-                // The base: what it sends back is the baked table's diffuse lobe.
+                // The base, which ends the stack: the pass's DIFFUSE_BASE code emits its lobe
+                // (the baked table's diffuse row under mode=baked).
                 continue;
             }
             if layer.roughness == 0.0 {
@@ -146,18 +147,16 @@ pub fn shade_spec(
 impl Structure {
     /// The structure of `layers` for a per-material pipeline of `variant`, whose mode a
     /// layer-count error names.
-    /// Only `mode=baked` takes a diffuse base: its table holds the base's lobe, which the
-    /// specialized code does not emit.
+    /// `mode=specialized-values` refuses a diffuse base: its constants hold no albedo
+    /// (`variant::LAYER_VALUES`). `specialized` emits the base's lobe with the pass's
+    /// DIFFUSE_BASE code; `baked` reads it from its table.
     pub fn for_variant(
         variant: VariantKey,
         layers: &[LayerParams],
     ) -> Result<Self, SpecializeError> {
-        if variant.mode != Mode::Baked {
+        if variant.mode == Mode::SpecializedValues {
             if let Some(i) = layers.iter().position(LayerParams::is_diffuse) {
-                return Err(SpecializeError::DiffuseBase {
-                    layer: i + 1,
-                    mode: variant.mode,
-                });
+                return Err(SpecializeError::DiffuseBase { layer: i + 1 });
             }
         }
         Self::of(variant.model, layers).map_err(|e| match e {

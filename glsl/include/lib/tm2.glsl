@@ -36,7 +36,7 @@ Tm2Factors tm2_factor(uint i, inout float eta_above, inout float cos_i) {
     c.gr = hg_g_of_alpha(c.alpha);
     c.grp = c.gr;
     c.conductor = tm_conductor_at(i, layer);
-    c.diffuse = DIFFUSE_BASE != 0u && !SPECIALIZED && tm_is_diffuse(layer);
+    c.diffuse = tm_diffuse_at(i, layer);
     c.skip = false;
     c.eta = 1.0;
     c.mu_t = cos_i;

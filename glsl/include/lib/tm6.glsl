@@ -283,7 +283,7 @@ bool tm6_step(uint step, uint layers, inout Tm6Walk w, inout vec3 transmittance)
     bool substrate = false;
     vec3 up[3] = w.e.up;
     vec3 up_g[3] = w.g.up;
-    if ((step & 1u) == 0u && DIFFUSE_BASE != 0u && !SPECIALIZED && tm_is_diffuse(layer)) {
+    if ((step & 1u) == 0u && tm_diffuse_at(i, layer)) {
         // A Lambertian base under the layers above: every flux class reaching it feeds one
         // diffuse lobe, which ends the walk.
         vec3 t_view = vec3(w.e.down[0] + w.e.down[1] + w.e.down[2]);
@@ -443,7 +443,9 @@ uint tm6_evaluate(float mu, out vec3 reflectance, out vec3 transmittance,
     w.emitted = vec3(0.0);
     transmittance = vec3(1.0);
     if (SPECIALIZED) {
-        [[unroll]] for (uint step = 0u; step < 2u * LAYER_COUNT - CONDUCTOR_BASE; ++step) {
+        // A conductor or a diffuse base ends the walk at its interface: no medium step.
+        uint ends_opaque = CONDUCTOR_BASE != 0u || DIFFUSE_BASE != 0u ? 1u : 0u;
+        [[unroll]] for (uint step = 0u; step < 2u * LAYER_COUNT - ends_opaque; ++step) {
             tm6_step(step, LAYER_COUNT, w, transmittance);
         }
     } else {

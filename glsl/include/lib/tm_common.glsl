@@ -116,6 +116,15 @@ bool tm_is_diffuse(LayerGpu layer) {
     return layer.diffuse.w != 0.0;
 }
 
+// Whether layer i is the stack's diffuse base: a pass with a diffuse base's code
+// (DIFFUSE_BASE) ends in one, which a specialized pipeline knows to be its last layer.
+bool tm_diffuse_at(uint i, LayerGpu layer) {
+    if (DIFFUSE_BASE == 0u) {
+        return false;
+    }
+    return SPECIALIZED ? i + 1u == LAYER_COUNT : tm_is_diffuse(layer);
+}
+
 // The stack `a` with a lossy component below it that is the same from above and below
 // (reflectance r, transmittance t: a medium crossed by diffuse light), by adding.rs's
 // general equations, with 1 − r − t absorbed.
