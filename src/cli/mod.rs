@@ -258,13 +258,20 @@ fn load_capturer(file: Option<&Path>) -> Result<Option<Capturer>> {
     let Some(file) = file else {
         return Ok(None);
     };
-    if file.extension().and_then(|e| e.to_str()) != Some("rdc") {
+    require_extension("--capture", file, "rdc", "RenderDoc's format")?;
+    Ok(Some(Capturer::load()?))
+}
+
+/// Errs unless `file` (given to `flag`) ends in `.ext`: what is written there is `format`,
+/// whatever the name says.
+fn require_extension(flag: &str, file: &Path, ext: &str, format: &str) -> Result<()> {
+    if file.extension().and_then(|e| e.to_str()) != Some(ext) {
         anyhow::bail!(
-            "--capture {}: a capture file ends in .rdc (RenderDoc's format)",
+            "{flag} {}: the file {flag} names ends in .{ext} ({format})",
             file.display()
         );
     }
-    Ok(Some(Capturer::load()?))
+    Ok(())
 }
 
 /// `1 study`, `2 studies`.

@@ -15,8 +15,8 @@ use lamina::tables::environment::EnvDesc;
 
 use super::args::{self, SceneArgs, SceneDefaults};
 use super::{
-    asset_path, check_validation, load_capturer, print_pipelines, save_pipelines,
-    stop_on_interrupt, GlobalArgs,
+    asset_path, check_validation, load_capturer, print_pipelines, require_extension,
+    save_pipelines, stop_on_interrupt, GlobalArgs,
 };
 
 #[derive(clap::Args)]
@@ -75,6 +75,8 @@ impl SceneDefaults for RenderScene {
 }
 
 pub fn run(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
+    require_extension("--out", &args.out, "exr", "linear HDR, OpenEXR")?;
+    require_extension("--png", &args.png, "png", "tone-mapped PNG")?;
     if args.reference {
         return run_reference(global, args);
     }

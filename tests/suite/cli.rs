@@ -186,6 +186,29 @@ fn zero_and_malformed_sizes_are_named() {
     assert_rejected(&["--size", "64"], &dir, &["WIDTHxHEIGHT"]);
 }
 
+/// `render` writes OpenEXR to `--out` and PNG to `--png`: a name with the other extension is
+/// refused before anything runs, naming the flag and the extension.
+#[test]
+fn output_files_with_the_wrong_extension_are_refused() {
+    let dir = common::scratch_dir("cli-extensions");
+    for (args, flag, ext) in [
+        (["--out", "o.png", "--png", "o2.png"], "--out o.png", ".exr"),
+        (["--out", "o.exr", "--png", "o.exr"], "--png o.exr", ".png"),
+    ] {
+        let mut full = vec!["--validation", "render", "--size", "64x48"];
+        full.extend_from_slice(&args);
+        let out = lamina(&full, &dir);
+        let message = stderr(&out);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(
+            message.contains(flag) && message.contains(ext),
+            "{args:?}: {message}"
+        );
+        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+        assert!(left.is_empty(), "{args:?} left files behind: {left:?}");
+    }
+}
+
 #[test]
 fn non_finite_and_out_of_range_exposures_are_refused() {
     let dir = common::scratch_dir("cli-exposure");
