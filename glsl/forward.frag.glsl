@@ -31,6 +31,9 @@ layout(location = 0) in vec3 world_position;
 layout(location = 1) in vec3 world_normal;
 layout(location = 2) in vec2 surface_uv;
 layout(location = 0) out vec4 color;
+// A varying stack under a per-material mode draws once per class of pixels, each draw
+// shading only its own (the stencil test, src/render/classes.rs): tested before shading.
+layout(early_fragment_tests) in;
 
 // The point being shaded: the models emit their lobes one by one (tm_emit_lobe) and each is
 // lit as it comes.

@@ -373,6 +373,14 @@ pub struct ShadeSpec {
     pub transmits: u32,
     /// The `ibl` axis (id 23).
     pub ibl: u32,
+    /// A varying stack's class pass (`render::classes`): the slots whose maps carry a value
+    /// across one of the model's tests, which the pass makes at run time (id 24).
+    pub dynamic_mask: u32,
+    /// The class's material layer per slot, 4 bits each: slots 0–7, then 8–15 (ids 25, 26).
+    pub layer_slots_lo: u32,
+    pub layer_slots_hi: u32,
+    /// `classify.frag.glsl`: the layer whose coverage a stencil mark tests (id 27).
+    pub mark_layer: u32,
     /// `specialized-values`: the layers' values (see [`LAYER_VALUES`]).
     pub values: [[f32; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
 }
@@ -383,7 +391,7 @@ impl Default for ShadeSpec {
     }
 }
 
-const AXIS_ENTRIES: usize = 24;
+const AXIS_ENTRIES: usize = 28;
 const VALUE_ENTRIES: usize = (MAX_LAYERS_LIMIT * VALUES_PER_LAYER) as usize;
 
 const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENTRIES] {
@@ -392,7 +400,7 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
         offset: 0,
         size: 4,
     }; AXIS_ENTRIES + VALUE_ENTRIES];
-    // ids 0…23 are the u32 fields in declaration order, 4 bytes apart from offset 0.
+    // ids 0…27 are the u32 fields in declaration order, 4 bytes apart from offset 0.
     let mut i = 0;
     while i < AXIS_ENTRIES {
         out[i].id = i as u32;
@@ -408,7 +416,7 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
     out
 }
 
-const _: () = assert!(std::mem::offset_of!(ShadeSpec, ibl) == 4 * (AXIS_ENTRIES - 1));
+const _: () = assert!(std::mem::offset_of!(ShadeSpec, mark_layer) == 4 * (AXIS_ENTRIES - 1));
 
 impl crate::vk::SpecConstants for ShadeSpec {
     const ENTRIES: &'static [crate::vk::SpecEntry] = &shade_spec_entries();
@@ -441,6 +449,10 @@ impl VariantKey {
             transport: self.transport.code(),
             transmits: 0,
             ibl: self.ibl.code(),
+            dynamic_mask: 0,
+            layer_slots_lo: 0,
+            layer_slots_hi: 0,
+            mark_layer: 0,
             values: [[0.0; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
         }
     }
@@ -736,6 +748,10 @@ mod tests {
             std::mem::offset_of!(ShadeSpec, diffuse_base)
         );
         assert_eq!(entries[20].offset, std::mem::offset_of!(ShadeSpec, lights));
+        assert_eq!(
+            entries[25].offset,
+            std::mem::offset_of!(ShadeSpec, layer_slots_lo)
+        );
         let last = entries.last().unwrap();
         assert_eq!(last.id, VALUE_ID_BASE + VALUE_ENTRIES as u32 - 1);
         assert_eq!(last.offset + last.size, std::mem::size_of::<ShadeSpec>());

@@ -405,6 +405,40 @@ impl SurfaceMaps {
         bits
     }
 
+    /// Layer `layer`'s coverage map as the shader tests it, texel by texel (held where its
+    /// value exceeds 1/2), and whether it is read in screen coordinates; `None` without one.
+    pub fn coverage_texels(&self, layer: usize) -> Option<(Vec<bool>, bool)> {
+        let code = self.code(layer, Field::Coverage);
+        if code == 0 {
+            return None;
+        }
+        let slice = &self.slices[(code & !SCREEN_BIT) as usize - 1];
+        Some((
+            slice.iter().map(|t| t[0] > 0.5).collect(),
+            code & SCREEN_BIT != 0,
+        ))
+    }
+
+    /// The lowest and highest value layer `layer`'s map of `field` takes (η: the mean of its
+    /// RGB, as the model's tests read it; a scalar field: its value): what any point of the
+    /// surface reads lies between them, the sampler's bilinear filter included. `None` where
+    /// the field is constant.
+    pub fn range(&self, layer: usize, field: Field) -> Option<(f64, f64)> {
+        let code = self.code(layer, field);
+        if code == 0 {
+            return None;
+        }
+        let slice = &self.slices[(code & !SCREEN_BIT) as usize - 1];
+        let value = |t: &[f32; 4]| match field {
+            Field::Ior => (f64::from(t[0]) + f64::from(t[1]) + f64::from(t[2])) / 3.0,
+            _ => f64::from(t[0]),
+        };
+        slice.iter().map(value).fold(None, |acc, v| match acc {
+            None => Some((v, v)),
+            Some((lo, hi)) => Some((f64::min(lo, v), f64::max(hi, v))),
+        })
+    }
+
     /// The fraction of the map's texels holding layer `layer` (1 without a coverage map).
     pub fn coverage_fraction(&self, layer: usize) -> f64 {
         let code = self.code(layer, Field::Coverage);

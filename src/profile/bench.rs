@@ -128,10 +128,10 @@ pub fn run(
                 summary: Summary::of(times)
                     .ok_or_else(|| Error::Unsupported("a timing was not finite".into()))?,
                 fragment_invocations,
-                pipeline_ms: pass.pipeline.creation.duration.as_secs_f64() * 1e3,
-                pipeline_cache_hit: pass.pipeline.creation.cache_hit,
+                pipeline_ms: pass.creation_ms(),
+                pipeline_cache_hit: pass.cache_hit(),
                 spirv_bytes: pass.spirv_bytes,
-                executable_stats: pass.pipeline.executable_statistics()?,
+                executable_stats: pass.pipeline().executable_statistics()?,
             })
         })
         .collect::<Result<Vec<_>>>()?;

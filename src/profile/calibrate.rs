@@ -118,6 +118,7 @@ impl Pair {
             attributes: &[],
             color_format: format,
             cull_back: false,
+            stencil: None,
         };
         let draw = gpu.graphics_pipeline(&layout, &desc, &(), "calibrate draw")?;
         let kernel = ComputeKernel::build(gpu, &KERNEL, &[], &[], KernelSpec::default())?;

@@ -1,11 +1,14 @@
 //! The shaded pass: the sphere, lit by the prefiltered environment, in one shader variant —
 //! for every material (`mode=generic`) or for one (every other mode), as its [`PassKey`]
-//! says; a baked material's pass keeps its lobe table.
+//! says; a baked material's pass keeps its lobe table. A varying stack under
+//! `mode=specialized` is several draws: its stencil marks, then one pipeline per class of
+//! pixels (`render::classes`).
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::shader::specialize::BakedShape;
-use crate::vk::{Format, GraphicsDesc, Pipeline, PipelineLayout};
+use crate::variant::ShadeSpec;
+use crate::vk::{Format, GraphicsDesc, Pipeline, PipelineLayout, StencilUse};
 
 use super::baked::{BakedTable, BakedTexture};
 use super::pass::{MaterialKey, PassKey};
@@ -14,10 +17,25 @@ use super::scene::Vertex;
 /// The entry points compiled per variant (the only ones that see the variant's defines).
 pub const ENTRIES: [&str; 2] = ["forward.vert.glsl", "forward.frag.glsl"];
 
+/// The stencil marks' fragment shader (`render::classes`).
+pub const MARK_ENTRY: &str = "classify.frag.glsl";
+
+/// One draw of the mesh in a pass.
+pub struct Draw {
+    pub pipeline: Pipeline,
+    /// A routed pass's draw: its stencil (reference, compared bits, written bits).
+    pub stencil: Option<(u32, u32, u32)>,
+}
+
 pub struct ForwardPass {
     /// What the pass was built for; its specialization constants come from it.
     pub key: PassKey,
-    pub pipeline: Pipeline,
+    /// The draws of a frame, in order: one shading pipeline, or for a routed pass (a varying
+    /// stack under `mode=specialized`) the stencil marks, then one pipeline per class.
+    pub draws: Vec<Draw>,
+    /// The draw whose pipeline the bench reports (a routed pass's class with the most
+    /// layers).
+    main: usize,
     /// Size of the fragment shader's SPIR-V.
     pub spirv_bytes: usize,
     /// `mode=baked` and the reference pass: the lobe table, on the host and in the texture
@@ -55,32 +73,119 @@ impl ForwardPass {
                 shape
             }
         });
-        let spec = key.spec(shape);
         let mut defines = variant.defines();
         if reference {
             defines.push(("LAMINA_REFERENCE", "1"));
         }
         let vertex = gpu.shaders.compile(ENTRIES[0], &defines)?;
         let fragment = gpu.shaders.compile(ENTRIES[1], &defines)?;
-        let desc = GraphicsDesc {
-            vertex: &vertex,
-            fragment: &fragment,
-            vertex_stride: std::mem::size_of::<Vertex>() as u32,
-            attributes: &[
-                (0, Format::R32G32B32_SFLOAT, 0),
-                (1, Format::R32G32B32_SFLOAT, 12),
-                (2, Format::R32G32_SFLOAT, 24),
-            ],
-            color_format,
-            cull_back: true,
+        let build =
+            |fragment: &[u32], stencil: Option<StencilUse>, spec: &ShadeSpec, name: &str| {
+                let desc = GraphicsDesc {
+                    vertex: &vertex,
+                    fragment,
+                    vertex_stride: std::mem::size_of::<Vertex>() as u32,
+                    attributes: &[
+                        (0, Format::R32G32B32_SFLOAT, 0),
+                        (1, Format::R32G32B32_SFLOAT, 12),
+                        (2, Format::R32G32_SFLOAT, 24),
+                    ],
+                    color_format,
+                    cull_back: true,
+                    stencil,
+                };
+                gpu.graphics_pipeline(layout, &desc, spec, name)
+            };
+        let (draws, main) = match &key.material {
+            MaterialKey::Classes(routing) => {
+                if !gpu.device.supports_stencil_target() {
+                    return Err(Error::Unsupported(format!(
+                        "variant {variant}: a varying stack under mode=specialized routes its \
+                         pixels by an 8-bit stencil, which `{}` cannot attach; shade it \
+                         under mode=generic",
+                        gpu.device.report.name
+                    )));
+                }
+                let marker = gpu.shaders.compile(MARK_ENTRY, &defines)?;
+                let compare = routing.compare_mask();
+                let mut draws = Vec::new();
+                for (bit, &layer) in routing.marks.iter().enumerate() {
+                    let pipeline = build(
+                        &marker,
+                        Some(StencilUse::Mark),
+                        &key.mark_spec(layer),
+                        &format!("mark layer {} {variant}", layer + 1),
+                    )?;
+                    draws.push(Draw {
+                        pipeline,
+                        stencil: Some((1 << bit, 0, 1 << bit)),
+                    });
+                }
+                let main = draws.len();
+                for class in &routing.classes {
+                    let pipeline = build(
+                        &fragment,
+                        Some(StencilUse::Equal),
+                        &key.class_spec(class),
+                        &format!("forward {variant} class {:#04x}", class.bits),
+                    )?;
+                    draws.push(Draw {
+                        pipeline,
+                        stencil: Some((class.bits, compare, 0)),
+                    });
+                }
+                (draws, main)
+            }
+            _ => {
+                let pipeline = build(
+                    &fragment,
+                    None,
+                    &key.spec(shape),
+                    &format!("forward {variant}"),
+                )?;
+                (
+                    vec![Draw {
+                        pipeline,
+                        stencil: None,
+                    }],
+                    0,
+                )
+            }
         };
-        let pipeline =
-            gpu.graphics_pipeline(layout, &desc, &spec, &format!("forward {variant}"))?;
         Ok(Self {
             key,
-            pipeline,
+            draws,
+            main,
             spirv_bytes: fragment.len() * 4,
             baked,
         })
+    }
+
+    /// The pipeline the bench reports: the only one, or a routed pass's class with the most
+    /// layers.
+    pub fn pipeline(&self) -> &Pipeline {
+        &self.draws[self.main].pipeline
+    }
+
+    /// Whether the pass routes pixels by a stencil (`render::classes`).
+    pub fn routed(&self) -> bool {
+        self.draws.iter().any(|d| d.stencil.is_some())
+    }
+
+    /// Host time of every pipeline's creation, in milliseconds.
+    pub fn creation_ms(&self) -> f64 {
+        self.draws
+            .iter()
+            .map(|d| d.pipeline.creation.duration.as_secs_f64() * 1e3)
+            .sum()
+    }
+
+    /// Whether the driver found every pipeline in the pipeline cache (`None` where one's
+    /// feedback is not valid).
+    pub fn cache_hit(&self) -> Option<bool> {
+        self.draws
+            .iter()
+            .map(|d| d.pipeline.creation.cache_hit)
+            .try_fold(true, |all, hit| hit.map(|h| all && h))
     }
 }

@@ -2,6 +2,7 @@
 //! pass and one cache of them ([`pass`]).
 
 pub mod baked;
+pub mod classes;
 pub mod eval;
 pub mod forward;
 pub mod furnace;

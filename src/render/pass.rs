@@ -17,6 +17,7 @@ use crate::shader::specialize::{
 };
 use crate::variant::{Mode, Model, ShadeSpec, VariantKey};
 
+use super::classes::{Class, Routing};
 use super::forward::ForwardPass;
 use super::lights::Lighting;
 use super::renderer::Renderer;
@@ -28,6 +29,9 @@ pub enum MaterialKey {
     Any,
     /// `mode=specialized`: every stack of this structure.
     Structure(Structure),
+    /// `mode=specialized`, a varying stack: its pixels routed to one pipeline per class of
+    /// structure (`render::classes`).
+    Classes(Routing),
     /// `mode=specialized-values` and `baked`: this stack.
     Values {
         structure: Structure,
@@ -72,12 +76,25 @@ impl PassKey {
                      per-material mode (use mode=generic)"
                 )));
             }
-            if surface.is_some() {
-                return Err(Error::Unsupported(format!(
-                    "variant {variant}: this stack varies over the surface (textures, patterns \
-                     or coverage); it shades under mode=generic only, which reads its maps per \
-                     pixel"
-                )));
+            if let Some(surface) = surface {
+                if variant.mode != Mode::Specialized {
+                    return Err(Error::Unsupported(format!(
+                        "variant {variant}: this stack varies over the surface (textures, \
+                         patterns or coverage); it shades under mode=generic, which reads its \
+                         maps per pixel, or mode=specialized, whose pipelines shade each \
+                         pixel's structure"
+                    )));
+                }
+                let routing = Routing::plan(variant.model, layers, &surface.maps)
+                    .map_err(|e| specialize(variant, e))?;
+                return Ok(Self {
+                    variant,
+                    material: MaterialKey::Classes(routing),
+                    surface: surface.maps.spec_bits(),
+                    diffuse: ends_diffuse(layers),
+                    transmits: ends_transmissive(layers),
+                    lights: !lighting.lights.is_empty(),
+                });
             }
             let structure =
                 Structure::for_variant(variant, layers).map_err(|e| specialize(variant, e))?;
@@ -132,7 +149,7 @@ impl PassKey {
     pub fn layers(&self) -> Option<&[LayerParams]> {
         match &self.material {
             MaterialKey::Values { layers, .. } | MaterialKey::Reference(layers) => Some(layers),
-            MaterialKey::Any | MaterialKey::Structure(_) => None,
+            MaterialKey::Any | MaterialKey::Structure(_) | MaterialKey::Classes(_) => None,
         }
     }
 
@@ -141,7 +158,7 @@ impl PassKey {
     pub fn spec(&self, baked: Option<BakedShape>) -> ShadeSpec {
         let mut spec = self.variant.spec();
         match &self.material {
-            MaterialKey::Any | MaterialKey::Reference(_) => {}
+            MaterialKey::Any | MaterialKey::Reference(_) | MaterialKey::Classes(_) => {}
             MaterialKey::Structure(structure) => structure.specialize(&mut spec),
             MaterialKey::Values { structure, layers } => {
                 structure.specialize(&mut spec);
@@ -157,6 +174,38 @@ impl PassKey {
         spec.diffuse_base = u32::from(self.diffuse);
         spec.transmits = u32::from(self.transmits);
         spec.lights = u32::from(self.lights);
+        spec
+    }
+
+    /// Errs unless a routed key's classes are those of `layers` varying by `surface`'s maps
+    /// (nothing to check for the other keys).
+    pub fn routes(&self, layers: &[LayerParams], surface: &Surface) -> Result<()> {
+        let MaterialKey::Classes(own) = &self.material else {
+            return Ok(());
+        };
+        match Routing::plan(self.variant.model, layers, &surface.maps) {
+            Ok(routing) if routing == *own => Ok(()),
+            _ => Err(Error::Unsupported(format!(
+                "this pass ({}) was built for a varying stack whose pixels fall into other \
+                 classes; prepare one for this stack",
+                self.variant
+            ))),
+        }
+    }
+
+    /// The specialization constants of class `class`'s pipeline (a routed key's).
+    pub fn class_spec(&self, class: &Class) -> ShadeSpec {
+        let mut spec = self.spec(None);
+        class.structure.specialize(&mut spec);
+        spec.diffuse_base = u32::from(class.diffuse);
+        spec
+    }
+
+    /// The specialization constants of the stencil mark of material layer `layer`'s
+    /// coverage (a routed key's).
+    pub fn mark_spec(&self, layer: usize) -> ShadeSpec {
+        let mut spec = self.spec(None);
+        spec.mark_layer = layer as u32;
         spec
     }
 
@@ -185,6 +234,12 @@ impl PassKey {
             MaterialKey::Structure(own) => {
                 Structure::of(self.variant.model, layers).ok().as_ref() == Some(own)
             }
+            // The routing depends on the maps too, which the renderer checks
+            // (`Renderer::check_pass`, by `PassKey::routes`).
+            MaterialKey::Classes(own) => own
+                .classes
+                .iter()
+                .all(|c| c.layers.iter().all(|&m| m < layers.len())),
             MaterialKey::Values { layers: own, .. } | MaterialKey::Reference(own) => {
                 own.as_slice() == layers
             }

@@ -344,18 +344,48 @@ impl<'g> Renderer<'g> {
 
         self.draw_sky(&sets, &target, &target_view, &mut profiler)?;
 
+        // A routed pass's stencil, cleared when its rendering begins.
+        let stencil = if pass.routed() {
+            let image = Image::new(
+                device,
+                ImageDesc::stencil_target(width, height),
+                "class stencil",
+            )?;
+            let view = image.view("class stencil")?;
+            Some((image, view))
+        } else {
+            None
+        };
         observe(ShadedPhase::Before);
         submit_and_wait(device, "shaded", |rec| {
-            rec.bind_pipeline(&pass.pipeline);
-            rec.bind_set(&pass.pipeline, &self.layout, SHADING_SET, &sets.shading);
-            rec.bind_set(&pass.pipeline, &self.layout, SCENE_SET, &sets.scene);
+            if let Some((image, _)) = &stencil {
+                rec.transition(
+                    image,
+                    0..1,
+                    ImageState::Undefined,
+                    ImageState::StencilAttachment,
+                );
+            }
             let scope = profiler
                 .begin(rec, "shaded")
                 .expect("the sky scope is closed");
-            rec.begin_rendering_load(&target_view, width, height);
+            match &stencil {
+                Some((_, view)) => {
+                    rec.begin_rendering_load_stencil(&target_view, view, width, height)
+                }
+                None => rec.begin_rendering_load(&target_view, width, height),
+            }
             rec.bind_vertex_buffer(&self.vertices);
             rec.bind_index_buffer_u32(&self.indices);
-            rec.draw_indexed(self.index_count);
+            for draw in &pass.draws {
+                rec.bind_pipeline(&draw.pipeline);
+                rec.bind_set(&draw.pipeline, &self.layout, SHADING_SET, &sets.shading);
+                rec.bind_set(&draw.pipeline, &self.layout, SCENE_SET, &sets.scene);
+                if let Some((reference, compare, write)) = draw.stencil {
+                    rec.set_stencil(reference, compare, write);
+                }
+                rec.draw_indexed(self.index_count);
+            }
             rec.end_rendering();
             profiler.end(rec, scope);
             Ok(())
@@ -436,6 +466,9 @@ impl<'g> Renderer<'g> {
     /// the renderer's lighting: each of them compiled into the pass (its [`PassKey`]).
     fn check_pass(&self, pass: &ForwardPass, layers: &[LayerParams]) -> Result<()> {
         pass.key.admits(layers)?;
+        if let Some(s) = self.surface_texture() {
+            pass.key.routes(layers, &s.surface)?;
+        }
         let key = &pass.key;
         match (self.surface_texture(), key.surface != 0) {
             (None, false) => {}

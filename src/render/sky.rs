@@ -23,6 +23,7 @@ impl SkyPass {
             attributes: &[],
             color_format,
             cull_back: false,
+            stencil: None,
         };
         let pipeline = gpu.graphics_pipeline(layout, &desc, &(), "sky")?;
         Ok(Self { pipeline })

@@ -19,6 +19,8 @@ pub enum SpecializeError {
     ConductorAbove { layer: usize },
     #[error("mode=baked holds at most {max} lobes; the stack has {count} (use mode=specialized)")]
     TooManyLobes { count: usize, max: usize },
+    #[error("the stack's layers vary through {count} different coverage maps; mode=specialized routes each pixel to its class's pipeline by an {bits}-bit stencil, one bit per map: shade it under mode=generic")]
+    TooManyCoverages { count: usize, bits: usize },
     #[error("layer {layer} is a diffuse base; mode=specialized-values pipelines hold no diffuse albedo among their constants: shade it under mode=specialized, generic or baked")]
     DiffuseBase { layer: usize },
 }
@@ -40,6 +42,41 @@ pub struct Structure {
     pub matched_mask: u32,
     /// Interfaces that refract but reflect nothing.
     pub clear_mask: u32,
+    /// A varying stack's class (`render::classes`): the layers whose maps carry a value
+    /// across one of the tests above, which the pass makes at run time; their bits in the
+    /// other masks are 0.
+    pub dynamic_mask: u32,
+    /// A varying stack's class: the material layer of each of its layers, 4 bits per layer
+    /// (layer i in bits 4i…4i + 3); 0 for a uniform stack.
+    pub slots: u64,
+}
+
+/// How far a layer's maps let the values the structure depends on range over the surface:
+/// (lowest, highest) where a map varies them (`SurfaceMaps::range`), `None` where constant.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Spread {
+    /// The mean of the layer's RGB η.
+    pub ior: Option<(f64, f64)>,
+    pub roughness: Option<(f64, f64)>,
+    pub depth: Option<(f64, f64)>,
+}
+
+/// How far a mapped value must stay from a test's threshold for the test to be a constant of
+/// the pipeline: the GPU reads the maps in f32 and filters them, the host decides in f64.
+const MAPPED_MARGIN: f64 = 1e-6;
+
+/// A test `x < t` (or `x ≥ t` as its negation) over the interval `[lo, hi]`: its one value
+/// there, or `None` where the interval reaches the threshold (within `margin`).
+fn below(lo: f64, hi: f64, t: f64, margin: f64) -> Option<bool> {
+    if hi < t - margin {
+        Some(true)
+    } else if lo >= t + margin {
+        Some(false)
+    } else if margin == 0.0 && lo == hi {
+        Some(lo < t)
+    } else {
+        None
+    }
 }
 
 fn mean(v: [f64; 3]) -> f64 {
@@ -55,44 +92,127 @@ impl Structure {
                 count: layers.len(),
             });
         }
+        let mut s = Self::walk(model, layers.iter().map(|l| (l, Spread::default())))?;
+        s.slots = 0;
+        Ok(s)
+    }
+
+    /// The structure of one class of a varying stack's pixels (`render::classes`): the
+    /// layers `present` (material indices, top first; possibly none) of `layers`, each
+    /// with the spread its maps give it (`spreads`, per material layer). A test that a map
+    /// carries across its threshold is left to run time (`dynamic_mask`).
+    pub fn of_class(
+        model: Model,
+        layers: &[LayerParams],
+        spreads: &[Spread],
+        present: &[usize],
+    ) -> Result<Self, SpecializeError> {
+        let mut s = Self::walk(model, present.iter().map(|&m| (&layers[m], spreads[m])))?;
+        s.slots = present
+            .iter()
+            .enumerate()
+            .fold(0, |acc, (i, &m)| acc | (m as u64) << (4 * i));
+        Ok(s)
+    }
+
+    /// The structure of `layers` as the models' tests see them (`Structure::of`), each
+    /// test over the interval its layer's spread gives: a constant where the interval lies
+    /// on one side of the threshold, else a bit of `dynamic_mask`.
+    fn walk<'a>(
+        model: Model,
+        layers: impl ExactSizeIterator<Item = (&'a LayerParams, Spread)>,
+    ) -> Result<Self, SpecializeError> {
+        let count = layers.len();
         let mut s = Self {
-            layer_count: layers.len() as u32,
+            layer_count: count as u32,
             ..Self::default()
         };
-        let mut eta_above = IOR_AIR;
-        for (i, layer) in layers.iter().enumerate() {
+        // The η of the medium above, as an interval (mapped when some map varies it).
+        let (mut above, mut above_mapped) = ((IOR_AIR, IOR_AIR), false);
+        for (i, (layer, spread)) in layers.enumerate() {
             let bit = 1u32 << i;
             if layer.is_diffuse() {
                 // The base, which ends the stack: the pass's DIFFUSE_BASE code emits its lobe
                 // (the baked table's diffuse row under mode=baked).
                 continue;
             }
-            if layer.roughness == 0.0 {
-                s.smooth_mask |= bit;
-            }
+            let (r_lo, r_hi) = spread
+                .roughness
+                .unwrap_or((layer.roughness, layer.roughness));
+            // α = 0 exactly (a map's α is never negative).
+            let smooth = match (r_lo > 0.0, r_hi <= 0.0) {
+                (true, _) => Some(false),
+                (_, true) => Some(true),
+                _ => None,
+            };
             if layer.is_conductor() {
-                if i + 1 != layers.len() {
+                if i + 1 != count {
                     return Err(SpecializeError::ConductorAbove { layer: i + 1 });
                 }
                 s.conductor_base = true;
+                s.settle(
+                    bit,
+                    [smooth, Some(false), Some(false), Some(false), Some(false)],
+                );
                 continue;
             }
-            if model == Model::Tm6 && layer.depth > 0.0 {
-                s.medium_mask |= bit;
+            let medium = if model == Model::Tm6 {
+                let (d_lo, d_hi) = spread.depth.unwrap_or((layer.depth, layer.depth));
+                match (d_lo > 0.0, d_hi <= 0.0) {
+                    (true, _) => Some(true),
+                    (_, true) => Some(false),
+                    _ => None,
+                }
+            } else {
+                Some(false)
+            };
+            let eta_mean = mean(layer.ior);
+            let (e_lo, e_hi) = spread.ior.unwrap_or((eta_mean, eta_mean));
+            let margin = if above_mapped || spread.ior.is_some() {
+                MAPPED_MARGIN
+            } else {
+                0.0
+            };
+            let (eta_lo, eta_hi) = (e_lo / above.1, e_hi / above.0);
+            // |η − 1| < t over [eta_lo, eta_hi].
+            let near = |t: f64| {
+                let far = (eta_lo - 1.0).abs().max((eta_hi - 1.0).abs());
+                let nearest = if eta_lo <= 1.0 && eta_hi >= 1.0 {
+                    0.0
+                } else {
+                    (eta_lo - 1.0).abs().min((eta_hi - 1.0).abs())
+                };
+                if far < t - margin {
+                    Some(true)
+                } else if nearest >= t + margin {
+                    Some(false)
+                } else {
+                    None
+                }
+            };
+            let matched = near(INDEX_MATCHED);
+            let (clear, denser) = if matched == Some(true) {
+                (Some(false), Some(false))
+            } else {
+                (
+                    near(REFLECTS_NOTHING),
+                    below(eta_lo, eta_hi, 1.0, margin).map(|b| !b),
+                )
+            };
+            s.settle(bit, [smooth, medium, matched, clear, denser]);
+            match matched {
+                // No interface: the medium above stays.
+                Some(true) => {}
+                Some(false) => {
+                    above = (e_lo, e_hi);
+                    above_mapped = spread.ior.is_some();
+                }
+                // Either: the medium above is one or the other.
+                None => {
+                    above = (above.0.min(e_lo), above.1.max(e_hi));
+                    above_mapped = true;
+                }
             }
-            let eta_layer = mean(layer.ior);
-            let eta = eta_layer / eta_above;
-            if (eta - 1.0).abs() < INDEX_MATCHED {
-                s.matched_mask |= bit;
-                continue;
-            }
-            if (eta - 1.0).abs() < REFLECTS_NOTHING {
-                s.clear_mask |= bit;
-            }
-            if eta >= 1.0 {
-                s.denser_mask |= bit;
-            }
-            eta_above = eta_layer;
         }
         Ok(s)
     }
@@ -168,11 +288,36 @@ impl Structure {
         })
     }
 
+    /// Sets layer `bit`'s masks from its tests (smooth, medium, index-matched, clear, denser),
+    /// or its `dynamic_mask` bit where one of them is not a constant.
+    fn settle(&mut self, bit: u32, tests: [Option<bool>; 5]) {
+        if tests.iter().any(Option::is_none) {
+            self.dynamic_mask |= bit;
+            return;
+        }
+        let masks = [
+            &mut self.smooth_mask,
+            &mut self.medium_mask,
+            &mut self.matched_mask,
+            &mut self.clear_mask,
+            &mut self.denser_mask,
+        ];
+        for (mask, test) in masks.into_iter().zip(tests) {
+            if test == Some(true) {
+                *mask |= bit;
+            }
+        }
+    }
+
     /// Tells `spec` this structure; the arrays get the material's own size (`max_layers`
     /// does not matter).
     pub fn specialize(&self, spec: &mut ShadeSpec) {
-        spec.max_layers = self.layer_count;
+        // A class whose coverage leaves no layer still declares one-element arrays.
+        spec.max_layers = self.layer_count.max(1);
         spec.layer_count = self.layer_count;
+        spec.dynamic_mask = self.dynamic_mask;
+        spec.layer_slots_lo = self.slots as u32;
+        spec.layer_slots_hi = (self.slots >> 32) as u32;
         spec.smooth_mask = self.smooth_mask;
         spec.conductor_base = u32::from(self.conductor_base);
         spec.medium_mask = self.medium_mask;

@@ -30,6 +30,8 @@ pub enum ImageState {
     /// Storage image written (and read) by compute shaders.
     ComputeWrite,
     ColorAttachment,
+    /// A stencil attachment, tested and written by the draws of a rendering scope.
+    StencilAttachment,
     /// A swapchain image handed to presentation.
     Present,
 }
@@ -60,6 +62,11 @@ impl ImageState {
                 L::COLOR_ATTACHMENT_OPTIMAL,
                 S::COLOR_ATTACHMENT_OUTPUT,
                 A::COLOR_ATTACHMENT_WRITE | A::COLOR_ATTACHMENT_READ,
+            ),
+            Self::StencilAttachment => (
+                L::STENCIL_ATTACHMENT_OPTIMAL,
+                S::EARLY_FRAGMENT_TESTS | S::LATE_FRAGMENT_TESTS,
+                A::DEPTH_STENCIL_ATTACHMENT_WRITE | A::DEPTH_STENCIL_ATTACHMENT_READ,
             ),
             Self::Present => (L::PRESENT_SRC_KHR, S::NONE, A::NONE),
         }
@@ -223,9 +230,32 @@ impl Recorder<'_> {
         self.begin_rendering_raw(target.raw, width, height, None);
     }
 
+    /// [`Recorder::begin_rendering_load`] with `stencil` (in `StencilAttachment` state) as the
+    /// stencil attachment, cleared to 0: the draws that follow route pixels by its bits.
+    pub fn begin_rendering_load_stencil(
+        &mut self,
+        target: &ImageView,
+        stencil: &ImageView,
+        width: u32,
+        height: u32,
+    ) {
+        self.begin_rendering_with(target.raw, Some(stencil.raw), width, height, None);
+    }
+
     pub(crate) fn begin_rendering_raw(
         &mut self,
         target: vk::ImageView,
+        width: u32,
+        height: u32,
+        clear: Option<[f32; 4]>,
+    ) {
+        self.begin_rendering_with(target, None, width, height, clear);
+    }
+
+    fn begin_rendering_with(
+        &mut self,
+        target: vk::ImageView,
+        stencil: Option<vk::ImageView>,
         width: u32,
         height: u32,
         clear: Option<[f32; 4]>,
@@ -248,11 +278,28 @@ impl Recorder<'_> {
             offset: vk::Offset2D { x: 0, y: 0 },
             extent: vk::Extent2D { width, height },
         };
-        let info = vk::RenderingInfo::default()
+        let stencil_attachment = stencil.map(|view| {
+            vk::RenderingAttachmentInfo::default()
+                .image_view(view)
+                .image_layout(vk::ImageLayout::STENCIL_ATTACHMENT_OPTIMAL)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::DONT_CARE)
+                .clear_value(vk::ClearValue {
+                    depth_stencil: vk::ClearDepthStencilValue {
+                        depth: 0.0,
+                        stencil: 0,
+                    },
+                })
+        });
+        let mut info = vk::RenderingInfo::default()
             .render_area(area)
             .layer_count(1)
             .color_attachments(&attachments);
-        // SAFETY: recording state; the view's image is in COLOR_ATTACHMENT_OPTIMAL.
+        if let Some(attachment) = stencil_attachment.as_ref() {
+            info = info.stencil_attachment(attachment);
+        }
+        // SAFETY: recording state; the view's image is in COLOR_ATTACHMENT_OPTIMAL, the
+        // stencil view's (if any) in STENCIL_ATTACHMENT_OPTIMAL.
         unsafe {
             self.device.raw.cmd_begin_rendering(self.raw, &info);
             let viewport = vk::Viewport {
@@ -265,6 +312,24 @@ impl Recorder<'_> {
             };
             self.device.raw.cmd_set_viewport(self.raw, 0, &[viewport]);
             self.device.raw.cmd_set_scissor(self.raw, 0, &[area]);
+        }
+    }
+
+    /// The stencil state of the draws that follow (a pipeline made with
+    /// `GraphicsDesc::stencil`): the reference value, the bits compared and the bits written.
+    pub fn set_stencil(&mut self, reference: u32, compare_mask: u32, write_mask: u32) {
+        let face = vk::StencilFaceFlags::FRONT_AND_BACK;
+        // SAFETY: recording state; the bound pipeline declares these states dynamic.
+        unsafe {
+            self.device
+                .raw
+                .cmd_set_stencil_reference(self.raw, face, reference);
+            self.device
+                .raw
+                .cmd_set_stencil_compare_mask(self.raw, face, compare_mask);
+            self.device
+                .raw
+                .cmd_set_stencil_write_mask(self.raw, face, write_mask);
         }
     }
 

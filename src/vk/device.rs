@@ -375,6 +375,19 @@ impl Device {
         self.report.shader_float16
     }
 
+    /// Whether `STENCIL_FORMAT` can be a stencil attachment here (optimal tiling).
+    pub fn supports_stencil_target(&self) -> bool {
+        // SAFETY: `physical` was enumerated from this device's instance, which outlives it.
+        let props = unsafe {
+            self.instance
+                .raw
+                .get_physical_device_format_properties(self.physical, super::STENCIL_FORMAT)
+        };
+        props
+            .optimal_tiling_features
+            .contains(vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT)
+    }
+
     pub fn wait_idle(&self) -> VkResult<()> {
         // SAFETY: the device is alive; waiting has no other precondition.
         unsafe { self.raw.device_wait_idle() }.check("vkDeviceWaitIdle")

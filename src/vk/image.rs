@@ -11,6 +11,10 @@ use super::device::Device;
 use super::error::{Check, VkResult};
 use super::memory;
 
+/// The stencil attachments' format: 8 bits, no depth (lavapipe and the desktop GPUs lamina
+/// runs on take it as an attachment; `Device::supports_stencil_target` checks).
+pub const STENCIL_FORMAT: vk::Format = vk::Format::S8_UINT;
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum ImageKind {
     D2,
@@ -79,6 +83,12 @@ impl ImageDesc {
         )
     }
 
+    /// An 8-bit stencil attachment (`STENCIL_FORMAT`) the draws of one frame route pixels by.
+    pub fn stencil_target(width: u32, height: u32) -> Self {
+        Self::new_2d(STENCIL_FORMAT, width, height)
+            .usage(vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT)
+    }
+
     pub fn mips(mut self, levels: u32) -> Self {
         self.mip_levels = levels;
         self
@@ -106,6 +116,7 @@ impl ImageDesc {
     pub fn aspect(&self) -> vk::ImageAspectFlags {
         match self.format {
             vk::Format::D32_SFLOAT | vk::Format::D16_UNORM => vk::ImageAspectFlags::DEPTH,
+            vk::Format::S8_UINT => vk::ImageAspectFlags::STENCIL,
             _ => vk::ImageAspectFlags::COLOR,
         }
     }

@@ -36,12 +36,12 @@ pub use command::{
 pub use descriptor::{BindingKind, DescriptorSet, DescriptorSetLayout, Resource, Stages};
 pub use device::{enumerate, Device, DeviceReport, DeviceSelector};
 pub use error::{VkError, VkResult};
-pub use image::{Image, ImageDesc, ImageKind, ImageView, Sampler, SamplerDesc};
+pub use image::{Image, ImageDesc, ImageKind, ImageView, Sampler, SamplerDesc, STENCIL_FORMAT};
 pub use instance::{Instance, InstanceDesc, MessageCounts};
 pub use overlay::Overlay;
 pub use pipeline::{
     ExecutableStat, ExecutableStats, GraphicsDesc, Pipeline, PipelineCreation, PipelineLayout,
-    SpecConstants, SpecEntry,
+    SpecConstants, SpecEntry, StencilUse,
 };
 pub use pipeline_cache::{CacheData, CacheDataError, PipelineCache};
 pub use query::{GpuProfiler, Nanos, ScopeError, ScopeTiming, ScopeToken};

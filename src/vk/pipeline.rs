@@ -250,14 +250,28 @@ impl Pipeline {
         });
         let vertex_input = VertexInput::new(desc);
         let vertex_state = vertex_input.info();
-        let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
-            .color_write_mask(vk::ColorComponentFlags::RGBA)];
+        let writes = if desc.stencil == Some(StencilUse::Mark) {
+            vk::ColorComponentFlags::empty()
+        } else {
+            vk::ColorComponentFlags::RGBA
+        };
+        let blend_attachments =
+            [vk::PipelineColorBlendAttachmentState::default().color_write_mask(writes)];
         let blend =
             vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&DYNAMIC_STATES);
+        let states = if desc.stencil.is_some() {
+            &DYNAMIC_STATES_STENCIL[..]
+        } else {
+            &DYNAMIC_STATES[..]
+        };
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(states);
         let color_formats = [desc.color_format];
         let mut rendering =
             vk::PipelineRenderingCreateInfo::default().color_attachment_formats(&color_formats);
+        if desc.stencil.is_some() {
+            rendering = rendering.stencil_attachment_format(super::STENCIL_FORMAT);
+        }
+        let depth_stencil = desc.stencil.map(StencilUse::state);
         let fixed = FixedFunction::new(desc.cull_back);
         Self::create(
             device,
@@ -265,7 +279,7 @@ impl Pipeline {
             name,
             "vkCreateGraphicsPipelines",
             |feedback| {
-                let info = vk::GraphicsPipelineCreateInfo::default()
+                let mut info = vk::GraphicsPipelineCreateInfo::default()
                     .stages(&stages)
                     .vertex_input_state(&vertex_state)
                     .input_assembly_state(&fixed.input_assembly)
@@ -278,6 +292,9 @@ impl Pipeline {
                     .flags(capture_flags(device))
                     .push_next(&mut rendering)
                     .push_next(feedback);
+                if let Some(state) = depth_stencil.as_ref() {
+                    info = info.depth_stencil_state(state);
+                }
                 // SAFETY: all pointers borrow locals that outlive the call; the cache is
                 // internally synchronized.
                 unsafe {
@@ -364,6 +381,15 @@ impl VertexInput {
 /// The graphics pipelines' dynamic state: the viewport and scissor, set at each draw.
 const DYNAMIC_STATES: [vk::DynamicState; 2] =
     [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+
+/// [`DYNAMIC_STATES`] and the stencil's reference and masks.
+const DYNAMIC_STATES_STENCIL: [vk::DynamicState; 5] = [
+    vk::DynamicState::VIEWPORT,
+    vk::DynamicState::SCISSOR,
+    vk::DynamicState::STENCIL_REFERENCE,
+    vk::DynamicState::STENCIL_COMPARE_MASK,
+    vk::DynamicState::STENCIL_WRITE_MASK,
+];
 
 /// The fixed-function state every graphics pipeline shares: triangle lists, one dynamic
 /// viewport, filled counter-clockwise triangles (culled from the back when asked), one sample.
@@ -509,4 +535,36 @@ pub struct GraphicsDesc<'a> {
     pub attributes: &'a [(u32, vk::Format, u32)],
     pub color_format: vk::Format,
     pub cull_back: bool,
+    /// What the pipeline does with a stencil attachment (`STENCIL_FORMAT`) of its rendering
+    /// scope; `None`: the scope has none.
+    pub stencil: Option<StencilUse>,
+}
+
+/// A graphics pipeline's part in routing pixels by the stencil: the reference value and the
+/// masks are dynamic (`Recorder::set_stencil`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StencilUse {
+    /// Writes the reference's bits (under the write mask) wherever its fragment survives, and
+    /// no colour.
+    Mark,
+    /// Shades only the pixels whose compared stencil bits equal the reference.
+    Equal,
+}
+
+impl StencilUse {
+    fn state(self) -> vk::PipelineDepthStencilStateCreateInfo<'static> {
+        let (compare, pass) = match self {
+            Self::Mark => (vk::CompareOp::ALWAYS, vk::StencilOp::REPLACE),
+            Self::Equal => (vk::CompareOp::EQUAL, vk::StencilOp::KEEP),
+        };
+        let face = vk::StencilOpState::default()
+            .fail_op(vk::StencilOp::KEEP)
+            .pass_op(pass)
+            .depth_fail_op(vk::StencilOp::KEEP)
+            .compare_op(compare);
+        vk::PipelineDepthStencilStateCreateInfo::default()
+            .stencil_test_enable(true)
+            .front(face)
+            .back(face)
+    }
 }

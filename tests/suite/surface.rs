@@ -221,18 +221,131 @@ fn a_varying_roughness_shades_as_the_cpu_twins_stack_at_each_pixel() {
 }
 
 #[test]
-fn varying_stacks_refuse_per_material_modes() {
+fn varying_stacks_refuse_the_per_material_modes_but_specialized() {
     let masked = stack(&toml(
         "tm2",
         &[format!("{COAT}coverage = 0.5\n"), GOLD.into()],
     ));
-    let err = PassKey::new(
+    for mode in ["specialized-values", "baked"] {
+        let err = PassKey::new(
+            format!("model=tm2,mode={mode}").parse().unwrap(),
+            &masked.layers,
+            masked.surface.as_deref(),
+            &Lighting::default(),
+        )
+        .expect_err("a varying stack under a per-value mode")
+        .to_string();
+        assert!(
+            err.contains("mode=generic") && err.contains("mode=specialized"),
+            "{err}"
+        );
+    }
+    PassKey::new(
         "model=tm2,mode=specialized".parse().unwrap(),
         &masked.layers,
         masked.surface.as_deref(),
         &Lighting::default(),
     )
-    .expect_err("a varying stack under mode=specialized")
-    .to_string();
-    assert!(err.contains("mode=generic"), "{err}");
+    .expect("mode=specialized routes a varying stack's pixels by class");
+}
+
+/// `mode=specialized` on a varying stack (render::classes: stencil marks, then one pipeline
+/// per class of pixels) renders what `mode=generic` renders, pixel by pixel: the textured
+/// presets, the divergence study's masked stacks, and stacks at the edges of what routing
+/// handles — maps that carry a structural test across its threshold (α reaching 0, η
+/// crossing 1, a depth reaching 0), a coverage that leaves some pixels no layer at all, a
+/// diffuse base that comes and goes, maps in different coordinates.
+#[test]
+fn specialized_classes_shade_what_the_generic_pass_does() {
+    let gpu = common::gpu();
+    let mut renderer = renderer(&gpu);
+    let presets = [
+        "worn-lacquered-copper",
+        "patchy-patina",
+        "dusty-varnished-gold",
+    ];
+    let mut stacks: Vec<(String, Stack)> = presets
+        .iter()
+        .map(|name| {
+            let path = common::repo_path(&format!("assets/materials/{name}.toml"));
+            (name.to_string(), Stack::load(&path).unwrap())
+        })
+        .collect();
+    for mask in ["noise", "blocks-2", "blocks-64", "uniform", "low", "high"] {
+        let path = common::repo_path(&format!("profiling/sweeps/divergence/{mask}.toml"));
+        stacks.push((format!("divergence {mask}"), Stack::load(&path).unwrap()));
+    }
+    let checker = |seed: u32, coords: &str| {
+        format!(
+            "coverage = {{ pattern = \"cells\", scale = 4, seed = {seed}, threshold = 0.5, \
+             coords = \"{coords}\" }}\n"
+        )
+    };
+    let edges = [
+        (
+            "α reaching 0, η crossing 1",
+            "tm2",
+            vec![
+                "ior = { pattern = \"noise\", scale = 3, range = [0.9, 1.1] }\nroughness = 0.1\n"
+                    .to_string(),
+                format!(
+                    "ior = [1.5, 1.5, 1.5]\nroughness = {{ pattern = \"checker\", scale = 4, \
+                     range = [0.0, 0.3] }}\n{}",
+                    checker(1, "uv")
+                ),
+                GOLD.to_string(),
+            ],
+        ),
+        (
+            "no layer left",
+            "tm2",
+            vec![
+                format!("{COAT}{}", checker(2, "uv")),
+                format!("{GOLD}{}", checker(3, "screen")),
+            ],
+        ),
+        (
+            "depth reaching 0, a diffuse base that comes and goes",
+            "tm6",
+            vec![
+                format!(
+                    "{FILM}depth = {{ pattern = \"checker\", scale = 2, range = [0.0, 0.5] }}\n\
+                     sigma_s = [1.0, 0.8, 0.6]\nsigma_a = [0.1, 0.2, 0.3]\ng = 0.4\n"
+                ),
+                format!("diffuse = [0.6, 0.5, 0.4]\n{}", checker(4, "uv")),
+            ],
+        ),
+        (
+            "a thin slab with a coat that comes and goes",
+            "tm2",
+            vec![format!("{COAT}{}", checker(5, "uv")), FILM.to_string()],
+        ),
+    ];
+    for (name, model, layers) in edges {
+        stacks.push((name.to_string(), stack(&toml(model, &layers))));
+    }
+    for (name, stack) in &stacks {
+        let model = stack.model;
+        let n = stack.layers.len();
+        let generic = render(
+            &mut renderer,
+            &format!("model={model},max_layers={n}"),
+            stack,
+        );
+        let specialized = render(
+            &mut renderer,
+            &format!("model={model},mode=specialized"),
+            stack,
+        );
+        let worst = common::largest_relative(&generic, &specialized, 1e-3);
+        assert!(
+            worst <= 1e-4,
+            "{name}: specialized differs from generic by {worst:.2e}"
+        );
+        assert!(
+            common::mean_radiance(&generic) > 0.0,
+            "{name}: the image must show something"
+        );
+    }
+    common::assert_validation_clean(&gpu);
 }

@@ -164,6 +164,12 @@ vec3 tm_diffuse_weight(vec3 t_view, vec3 rho, TmSlab d) {
 // ([[unroll]] in the models) every branch below folds and the dead paths vanish, and
 // MODE_SPECIALIZED_VALUES has the numbers too. The host decides the structure with the f64
 // model's own tests (src/specialize.rs), so both agree with the CPU oracle.
+// The material layer of slot `i` in a pass built for one class of a varying stack's pixels
+// (shared/variant.glsl's LAYER_SLOTS_LO/HI): a constant where `i` is.
+uint tm_slot(uint i) {
+    return ((i < 8u ? LAYER_SLOTS_LO >> (4u * i) : LAYER_SLOTS_HI >> (4u * (i - 8u)))) & 15u;
+}
+
 #ifdef TM_SURFACE_MAPS
 // A spatially varying stack (SURFACE_MAPS; src/material/surface.rs, whose SurfaceMaps::layers_at
 // is the CPU twin): an entry point that has texture coordinates defines TM_SURFACE_MAPS and
@@ -201,20 +207,36 @@ vec4 tm_map(uint code) {
     return textureLod(layer_maps, vec3(tm_surface_uv, float((code & 0x7fu) - 1u)), 0.0);
 }
 
+// Whether the coverage of material layer `layer` holds it at the point (a layer without a
+// coverage map: everywhere). classify.frag.glsl marks the stencil by the same test.
+bool tm_covered(uint layer) {
+    uint coverage = tm_varies(7u) ? material.maps[layer].y >> 24 : 0u;
+    return coverage == 0u || texelFetch(layer_maps, tm_map_texel(coverage), 0).r > 0.5;
+}
+
 void tm_surface_begin(vec2 uv, vec2 frag_coord) {
     tm_surface_uv = uv;
     tm_surface_pixel = ivec2(frag_coord);
+    if (SPECIALIZED) {
+        // The pass shades one class of pixels: its layers are constants (tm_slot).
+        tm_surface_count = LAYER_COUNT;
+        return;
+    }
     tm_surface_slots[0] = 0u;
     uint count = min(material.info.x, MAX_LAYERS);
     uint n = 0u;
     for (uint i = 0u; i < count; ++i) {
-        uint coverage = tm_varies(7u) ? material.maps[i].y >> 24 : 0u;
-        if (coverage == 0u || texelFetch(layer_maps, tm_map_texel(coverage), 0).r > 0.5) {
+        if (tm_covered(i)) {
             tm_surface_slots[n] = i;
             ++n;
         }
     }
     tm_surface_count = n;
+}
+
+// The material layer at slot `i` of the point's stack.
+uint tm_surface_slot(uint i) {
+    return SPECIALIZED ? tm_slot(i) : tm_surface_slots[i];
 }
 
 // Layer `index` of the material with its varying fields read at the point.
@@ -257,7 +279,7 @@ LayerGpu tm_layer(uint i) {
     }
 #ifdef TM_SURFACE_MAPS
     if (SURFACE_MAPS != 0u) {
-        return tm_surface_layer(tm_surface_slots[i]);
+        return tm_surface_layer(tm_surface_slot(i));
     }
 #endif
     return material.layers[i];
@@ -300,7 +322,7 @@ vec3 tm_transported(uint i, TmTransportAt at, vec3 weight) {
     uint row = i;
 #ifdef TM_SURFACE_MAPS
     if (SURFACE_MAPS != 0u) {
-        row = tm_surface_slots[i];
+        row = tm_surface_slot(i);
     }
 #endif
     return weight * tm_transport_ratio(row, at);
@@ -320,6 +342,10 @@ vec3 tm_transported_transmittance(TmTransportAt at, vec3 t) {
 // (§4.4's first-order g_t0, `g_t0`) refracted back out through the base's back face, parallel
 // to the stack, into the outside medium (src/model/mod.rs's transmitted_alpha).
 float tm_transmitted_alpha(float g_t0, uint count) {
+    // A pixel whose coverage leaves no layer: nothing there, a clear view through.
+    if (count == 0u) {
+        return 0.0;
+    }
     float eta = tm_mean(tm_layer(count - 1u).ior.rgb) / IOR_AIR;
     return hg_alpha_of_g(hg_refract(g_t0, eta));
 }
@@ -328,33 +354,40 @@ bool tm_bit(uint mask, uint i) {
     return ((mask >> i) & 1u) != 0u;
 }
 
+// Whether layer i's structure is a constant of the pipeline: a per-material pipeline's, unless
+// a map carries the layer's values across one of the tests below (DYNAMIC_MASK), which it
+// then makes at run time as the generic pipeline does.
+bool tm_fixed_at(uint i) {
+    return SPECIALIZED && !tm_bit(DYNAMIC_MASK, i);
+}
+
 bool tm_conductor_at(uint i, LayerGpu layer) {
     return SPECIALIZED ? CONDUCTOR_BASE != 0u && i + 1u == LAYER_COUNT : tm_is_conductor(layer);
 }
 
 // An index-matched interface (relative IOR η): none at all.
 bool tm_matched_at(uint i, float eta) {
-    return SPECIALIZED ? tm_bit(MATCHED_MASK, i) : abs(eta - 1.0) < TM_INDEX_MATCHED;
+    return tm_fixed_at(i) ? tm_bit(MATCHED_MASK, i) : abs(eta - 1.0) < TM_INDEX_MATCHED;
 }
 
 // An interface that refracts but reflects nothing.
 bool tm_clear_at(uint i, float eta) {
-    return SPECIALIZED ? tm_bit(CLEAR_MASK, i) : abs(eta - 1.0) < TM_REFLECTS_NOTHING;
+    return tm_fixed_at(i) ? tm_bit(CLEAR_MASK, i) : abs(eta - 1.0) < TM_REFLECTS_NOTHING;
 }
 
 // Denser below (η ≥ 1): light going down cannot be trapped, light going up can.
 bool tm_denser_at(uint i, float eta) {
-    return SPECIALIZED ? tm_bit(DENSER_MASK, i) : eta >= 1.0;
+    return tm_fixed_at(i) ? tm_bit(DENSER_MASK, i) : eta >= 1.0;
 }
 
 bool tm_medium_at(uint i, LayerGpu layer) {
-    return SPECIALIZED ? tm_bit(MEDIUM_MASK, i) : layer.params.y > 0.0;
+    return tm_fixed_at(i) ? tm_bit(MEDIUM_MASK, i) : layer.params.y > 0.0;
 }
 
 // A smooth interface's directional albedo is its Fresnel reflectance: exact, with no table
 // (src/model/mod.rs's `albedo`).
 bool tm_smooth_at(uint i, float alpha) {
-    return SPECIALIZED ? tm_bit(SMOOTH_MASK, i) : alpha == 0.0;
+    return tm_fixed_at(i) ? tm_bit(SMOOTH_MASK, i) : alpha == 0.0;
 }
 
 vec3 tm_albedo_rgb(uint i, float mu, float alpha, vec3 eta, vec3 kappa) {

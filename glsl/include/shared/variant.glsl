@@ -31,7 +31,7 @@ layout(constant_id = 14) const uint CLEAR_MASK = 0;      // refracts, reflects n
 layout(constant_id = 15) const uint LOBE_COUNT = 0;
 layout(constant_id = 16) const uint RETRO_MASK = 0;
 layout(constant_id = 17) const uint BAKED_SIZE = 0;
-// Non-zero: the stack varies over the surface (maps, coverage; generic mode only), and bit k
+// Non-zero: the stack varies over the surface (maps, coverage), and bit k
 // says which field some layer reads from a map (src/material/surface.rs's spec_bits): the
 // forward pass reads each pixel's layers through lib/tm_common.glsl's surface lookups.
 layout(constant_id = 18) const uint SURFACE_MAPS = 0;
@@ -48,6 +48,16 @@ layout(constant_id = 22) const uint TRANSMITS = 0;
 // IBL_SPLIT_SUM, IBL_MATCHED or IBL_TAPS: how the environment lights each lobe
 // (lib/ibl.glsl, forward.frag.glsl's lobe_radiance).
 layout(constant_id = 23) const uint IBL = 0;
+// A varying stack under a per-material mode (SURFACE_MAPS and SPECIALIZED): the pipeline
+// shades one class of pixels, those whose coverage leaves the same layers (src/render/
+// classes.rs). LAYER_SLOTS_LO/HI: slot i's layer of the material, 4 bits each (slots 0–7 in
+// LO, 8–15 in HI); DYNAMIC_MASK: the slots whose maps carry a value across one of the
+// model's tests, which such a slot makes at run time as the generic pipeline does.
+layout(constant_id = 24) const uint DYNAMIC_MASK = 0;
+layout(constant_id = 25) const uint LAYER_SLOTS_LO = 0;
+layout(constant_id = 26) const uint LAYER_SLOTS_HI = 0;
+// classify.frag.glsl: the material layer whose coverage the pass marks in the stencil.
+layout(constant_id = 27) const uint MARK_LAYER = 0;
 
 // The codes of every axis value (MODEL_TM2, TIR_LUT32, FGD_RESAMPLED4D, G2_EARL, …), written
 // from the Rust value tables by src/shader/compiler.rs.
