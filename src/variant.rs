@@ -381,6 +381,9 @@ pub struct ShadeSpec {
     pub layer_slots_hi: u32,
     /// `classify.frag.glsl`: the layer whose coverage a stencil mark tests (id 27).
     pub mark_layer: u32,
+    /// A class pass: per slot, a byte of the fields its layer reads from maps, four slots
+    /// per word (ids 28–31; `render::classes::Class::slot_maps`).
+    pub slot_maps: [u32; 4],
     /// `specialized-values`: the layers' values (see [`LAYER_VALUES`]).
     pub values: [[f32; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
 }
@@ -391,7 +394,7 @@ impl Default for ShadeSpec {
     }
 }
 
-const AXIS_ENTRIES: usize = 28;
+const AXIS_ENTRIES: usize = 32;
 const VALUE_ENTRIES: usize = (MAX_LAYERS_LIMIT * VALUES_PER_LAYER) as usize;
 
 const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENTRIES] {
@@ -400,7 +403,7 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
         offset: 0,
         size: 4,
     }; AXIS_ENTRIES + VALUE_ENTRIES];
-    // ids 0…27 are the u32 fields in declaration order, 4 bytes apart from offset 0.
+    // ids 0…31 are the u32 fields in declaration order, 4 bytes apart from offset 0.
     let mut i = 0;
     while i < AXIS_ENTRIES {
         out[i].id = i as u32;
@@ -416,7 +419,7 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
     out
 }
 
-const _: () = assert!(std::mem::offset_of!(ShadeSpec, mark_layer) == 4 * (AXIS_ENTRIES - 1));
+const _: () = assert!(std::mem::offset_of!(ShadeSpec, slot_maps) + 12 == 4 * (AXIS_ENTRIES - 1));
 
 impl crate::vk::SpecConstants for ShadeSpec {
     const ENTRIES: &'static [crate::vk::SpecEntry] = &shade_spec_entries();
@@ -453,6 +456,7 @@ impl VariantKey {
             layer_slots_lo: 0,
             layer_slots_hi: 0,
             mark_layer: 0,
+            slot_maps: [0; 4],
             values: [[0.0; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
         }
     }

@@ -405,6 +405,26 @@ impl SurfaceMaps {
         bits
     }
 
+    /// The fields layer `layer` reads from maps, a bit each: η, κ, σs, σa, α, depth, g, the
+    /// diffuse albedo from bit 0 (a class pass's `SLOT_MAPS` byte; the coverage, which the
+    /// stencil marks read, is not among them).
+    pub fn mapped_fields(&self, layer: usize) -> u32 {
+        [
+            Field::Ior,
+            Field::Kappa,
+            Field::SigmaS,
+            Field::SigmaA,
+            Field::Roughness,
+            Field::Depth,
+            Field::G,
+            Field::Diffuse,
+        ]
+        .iter()
+        .enumerate()
+        .filter(|(_, &field)| self.code(layer, field) != 0)
+        .fold(0, |bits, (k, _)| bits | 1 << k)
+    }
+
     /// Layer `layer`'s coverage map as the shader tests it, texel by texel (held where its
     /// value exceeds 1/2), and whether it is read in screen coordinates; `None` without one.
     pub fn coverage_texels(&self, layer: usize) -> Option<(Vec<bool>, bool)> {

@@ -39,6 +39,10 @@ pub struct Class {
     pub structure: Structure,
     /// The class's stack ends in a diffuse base (its pipeline's `DIFFUSE_BASE`).
     pub diffuse: bool,
+    /// Per layer of the class, a byte of the fields it reads from maps
+    /// (`SurfaceMaps::mapped_fields`), four layers per word: the pass compiles those lookups
+    /// only.
+    pub slot_maps: [u32; 4],
 }
 
 /// How a varying stack's pixels reach their pipelines.
@@ -131,11 +135,16 @@ impl Routing {
                     .collect();
                 let structure = Structure::of_class(model, layers, &spreads, &present)?;
                 let diffuse = present.last().is_some_and(|&m| layers[m].is_diffuse());
+                let mut slot_maps = [0u32; 4];
+                for (i, &m) in present.iter().enumerate() {
+                    slot_maps[i / 4] |= maps.mapped_fields(m) << (8 * (i % 4));
+                }
                 Ok(Class {
                     bits,
                     layers: present,
                     structure,
                     diffuse,
+                    slot_maps,
                 })
             })
             .collect::<Result<Vec<_>, SpecializeError>>()?;
@@ -265,6 +274,8 @@ mod tests {
         .unwrap();
         assert_eq!(r.classes.len(), 1);
         assert_eq!(r.classes[0].structure.dynamic_mask, 0b01);
+        // Slot 0 reads α (bit 4) from a map; the gold reads nothing.
+        assert_eq!(r.classes[0].slot_maps, [0x10, 0, 0, 0]);
         // η from 0.9 to 1.1 over a coat of 1.0: index-matched, lighter and denser all occur,
         // and the layer below it sees either medium above.
         let r = routing(

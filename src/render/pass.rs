@@ -198,6 +198,7 @@ impl PassKey {
         let mut spec = self.spec(None);
         class.structure.specialize(&mut spec);
         spec.diffuse_base = u32::from(class.diffuse);
+        spec.slot_maps = class.slot_maps;
         spec
     }
 

@@ -11,7 +11,7 @@ use crate::material::{base_variant, presets, Stack, Surface};
 use crate::model::LayerParams;
 use crate::tables::environment::EnvDesc;
 use crate::text::TextFont;
-use crate::variant::VariantKey;
+use crate::variant::{Mode, VariantKey};
 
 use super::lights::Lighting;
 use super::pass::{PassCache, PassKey};
@@ -155,9 +155,13 @@ pub fn render(
             let (x0, y0) = (GAP + c * (t + GAP), GAP + r * (t + GAP));
             let variant = column.variant;
             let varies = row.surface.is_some();
-            if varies && variant.mode.per_material() {
-                // A varying stack shades under mode=generic only: the tile says so.
-                let label = format!("{} · {}: varies, generic only", row.name, column.label);
+            if varies && variant.mode.per_material() && variant.mode != Mode::Specialized {
+                // A varying stack shades under mode=generic and specialized only: the tile
+                // says so.
+                let label = format!(
+                    "{} · {}: varies, generic or specialized only",
+                    row.name, column.label
+                );
                 label_tile(&font, &mut sheet, width, (x0, y0), t, &label);
                 continue;
             }

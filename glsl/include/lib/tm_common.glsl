@@ -192,11 +192,15 @@ bool tm_varies(uint bit) {
 
 // The texel of map `code` holding the point: the pixel's in screen coordinates, else the
 // nearest to its texture coordinates (repeated).
+// The repeat is taken in floats: integer division has no vector instruction on a CPU, and
+// whole numbers below 2^24 divide exactly enough that the floor is the integer quotient's.
 ivec3 tm_map_texel(uint code) {
     ivec2 n = textureSize(layer_maps, 0).xy;
-    ivec2 texel = (code & TM_SCREEN_BIT) != 0u ? tm_surface_pixel
-                                               : ivec2(floor(tm_surface_uv * vec2(n)));
-    return ivec3(((texel % n) + n) % n, int((code & 0x7fu) - 1u));
+    vec2 size = vec2(n);
+    vec2 texel = (code & TM_SCREEN_BIT) != 0u ? vec2(tm_surface_pixel)
+                                              : floor(tm_surface_uv * size);
+    ivec2 wrapped = ivec2(texel - size * floor(texel / size));
+    return ivec3(clamp(wrapped, ivec2(0), n - 1), int((code & 0x7fu) - 1u));
 }
 
 // The value of map `code` at the point: bilinear over texture coordinates, or the pixel's.
@@ -239,26 +243,43 @@ uint tm_surface_slot(uint i) {
     return SPECIALIZED ? tm_slot(i) : tm_surface_slots[i];
 }
 
-// Layer `index` of the material with its varying fields read at the point.
-LayerGpu tm_surface_layer(uint index) {
+// The fields slot `i` of a class's pass reads from maps (shared/variant.glsl's SLOT_MAPS_0…3,
+// a byte per slot: η, κ, σs, σa, α, depth, g, diffuse albedo from bit 0): constants, so a
+// class pass compiles only the lookups its layers make.
+uint tm_slot_maps(uint i) {
+    uint word = i < 4u ? SLOT_MAPS_0 : i < 8u ? SLOT_MAPS_1 : i < 12u ? SLOT_MAPS_2 : SLOT_MAPS_3;
+    return (word >> (8u * (i & 3u))) & 0xffu;
+}
+
+// Whether slot `i` may read field `bit` from a map: in a class's pass, whether its layer does
+// (tm_slot_maps' bit `slot_bit`); in the generic pass, whether some layer does (tm_varies,
+// SURFACE_MAPS' bit `bit`), its code deciding at run time. lavapipe runs the lookup of a
+// branch whose condition is not a constant whether it is taken or not.
+bool tm_maps(uint i, uint slot_bit, uint bit) {
+    return SPECIALIZED ? ((tm_slot_maps(i) >> slot_bit) & 1u) != 0u : tm_varies(bit);
+}
+
+// Slot `i` of the point's stack with its varying fields read at the point.
+LayerGpu tm_surface_layer(uint i) {
+    uint index = tm_surface_slot(i);
     LayerGpu layer = material.layers[index];
     uvec3 codes = material.maps[index].xyz;
     uint c = codes.x & 0xffu;
-    if (tm_varies(0u) && c != 0u) layer.ior.rgb = tm_map(c).rgb;
+    if (tm_maps(i, 0u, 0u) && c != 0u) layer.ior.rgb = tm_map(c).rgb;
     c = (codes.x >> 8) & 0xffu;
-    if (tm_varies(1u) && c != 0u) layer.kappa.rgb = tm_map(c).rgb;
+    if (tm_maps(i, 1u, 1u) && c != 0u) layer.kappa.rgb = tm_map(c).rgb;
     c = (codes.x >> 16) & 0xffu;
-    if (tm_varies(2u) && c != 0u) layer.sigma_s.rgb = tm_map(c).rgb;
+    if (tm_maps(i, 2u, 2u) && c != 0u) layer.sigma_s.rgb = tm_map(c).rgb;
     c = codes.x >> 24;
-    if (tm_varies(3u) && c != 0u) layer.sigma_a.rgb = tm_map(c).rgb;
+    if (tm_maps(i, 3u, 3u) && c != 0u) layer.sigma_a.rgb = tm_map(c).rgb;
     c = codes.y & 0xffu;
-    if (tm_varies(4u) && c != 0u) layer.params.x = tm_map(c).r;
+    if (tm_maps(i, 4u, 4u) && c != 0u) layer.params.x = tm_map(c).r;
     c = (codes.y >> 8) & 0xffu;
-    if (tm_varies(5u) && c != 0u) layer.params.y = tm_map(c).r;
+    if (tm_maps(i, 5u, 5u) && c != 0u) layer.params.y = tm_map(c).r;
     c = (codes.y >> 16) & 0xffu;
-    if (tm_varies(6u) && c != 0u) layer.params.z = tm_map(c).r;
+    if (tm_maps(i, 6u, 6u) && c != 0u) layer.params.z = tm_map(c).r;
     c = codes.z & 0xffu;
-    if (tm_varies(8u) && c != 0u) layer.diffuse.rgb = tm_map(c).rgb;
+    if (tm_maps(i, 7u, 8u) && c != 0u) layer.diffuse.rgb = tm_map(c).rgb;
     return layer;
 }
 #endif
@@ -279,7 +300,7 @@ LayerGpu tm_layer(uint i) {
     }
 #ifdef TM_SURFACE_MAPS
     if (SURFACE_MAPS != 0u) {
-        return tm_surface_layer(tm_surface_slot(i));
+        return tm_surface_layer(i);
     }
 #endif
     return material.layers[i];

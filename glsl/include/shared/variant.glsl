@@ -58,6 +58,13 @@ layout(constant_id = 25) const uint LAYER_SLOTS_LO = 0;
 layout(constant_id = 26) const uint LAYER_SLOTS_HI = 0;
 // classify.frag.glsl: the material layer whose coverage the pass marks in the stencil.
 layout(constant_id = 27) const uint MARK_LAYER = 0;
+// A class's pass: per slot, a byte of the fields its layer reads from maps (η, κ, σs, σa, α,
+// depth, g, diffuse albedo from bit 0), four slots per word (lib/tm_common.glsl's
+// tm_slot_maps).
+layout(constant_id = 28) const uint SLOT_MAPS_0 = 0;
+layout(constant_id = 29) const uint SLOT_MAPS_1 = 0;
+layout(constant_id = 30) const uint SLOT_MAPS_2 = 0;
+layout(constant_id = 31) const uint SLOT_MAPS_3 = 0;
 
 // The codes of every axis value (MODEL_TM2, TIR_LUT32, FGD_RESAMPLED4D, G2_EARL, …), written
 // from the Rust value tables by src/shader/compiler.rs.
