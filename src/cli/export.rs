@@ -1,10 +1,12 @@
 //! `lamina export`: the forward pass of one variant and material as SPIR-V with its
 //! specialization constants frozen to the pass's values (`lamina::shader::freeze`), one module
 //! per entry point, and `spec.json` with the values: input for offline compilers and shader
-//! analysers that take no specialization data.
+//! analysers that take no specialization data. A varying stack under `mode=specialized`
+//! draws several pipelines (`render::classes`): each gets its own sub-directory of the same
+//! layout, `mark-layer-N/` for a stencil mark and `class-BB/` for a class of pixels.
 
 use std::collections::HashMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use lamina::imageio::write_file_atomically;
@@ -12,6 +14,7 @@ use lamina::material::resolve_with_variant;
 use lamina::profile::plan::Case;
 use lamina::render::forward;
 use lamina::render::lights::Lighting;
+use lamina::render::pass::MaterialKey;
 use lamina::shader::freeze::freeze;
 use lamina::shader::ShaderCompiler;
 use lamina::variant::{Mode, ShadeSpec};
@@ -35,6 +38,9 @@ pub struct ExportArgs {
 struct SpecFile {
     variant: String,
     material: String,
+    /// A routed pass's draw: what it is (a stencil mark, or a class and its layers).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    draw: Option<String>,
     /// The modules written, by entry point.
     modules: Vec<Module>,
     /// Every specialization constant: its SpecId and the 32 bits it was frozen to (the
@@ -67,39 +73,79 @@ pub fn run(args: &ExportArgs) -> Result<()> {
     }
     let material = stack.name.clone();
     let key = Case { variant, stack }.pass_key(&Lighting::default())?;
-    let spec = key.spec(None);
+    let vertex = forward::ENTRIES[0];
+    let draws: Vec<(PathBuf, Option<String>, [&str; 2], ShadeSpec)> = match &key.material {
+        MaterialKey::Classes(routing) => {
+            let marks = routing.marks.iter().map(|&layer| {
+                (
+                    args.out.join(format!("mark-layer-{}", layer + 1)),
+                    Some(format!("stencil mark of layer {}'s coverage", layer + 1)),
+                    [vertex, forward::MARK_ENTRY],
+                    key.mark_spec(layer),
+                )
+            });
+            let classes = routing.classes.iter().map(|class| {
+                let layers: Vec<String> =
+                    class.layers.iter().map(|m| (m + 1).to_string()).collect();
+                (
+                    args.out.join(format!("class-{:02x}", class.bits)),
+                    Some(format!(
+                        "class {:#04x}: layers [{}]",
+                        class.bits,
+                        layers.join(", ")
+                    )),
+                    forward::ENTRIES,
+                    key.class_spec(class),
+                )
+            });
+            marks.chain(classes).collect()
+        }
+        _ => vec![(args.out.clone(), None, forward::ENTRIES, key.spec(None))],
+    };
     let compiler = ShaderCompiler::new()?;
-    let constants = constants(&spec);
-    let values: HashMap<u32, u32> = constants.iter().map(|c| (c.id, c.bits)).collect();
-    let mut modules = Vec::new();
-    for entry in forward::ENTRIES {
-        let words = compiler.compile(entry, &variant.defines())?;
+    for (dir, draw, entries, spec) in draws {
+        let file = SpecFile {
+            variant: variant.to_string(),
+            material: material.clone(),
+            draw,
+            modules: Vec::new(),
+            constants: constants(&spec),
+        };
+        export_draw(&compiler, &dir, &entries, file, &variant.defines())?;
+    }
+    Ok(())
+}
+
+/// Writes `entries` frozen to `file`'s constants into `dir`, then `file` (with the modules)
+/// as `spec.json`.
+fn export_draw(
+    compiler: &ShaderCompiler,
+    dir: &Path,
+    entries: &[&str],
+    mut file: SpecFile,
+    defines: &[(&str, &str)],
+) -> Result<()> {
+    let values: HashMap<u32, u32> = file.constants.iter().map(|c| (c.id, c.bits)).collect();
+    for entry in entries {
+        let words = compiler.compile(entry, defines)?;
         let frozen = freeze(&words, &values).with_context(|| format!("freezing {entry}"))?;
-        let file = format!("{}.spv", entry.trim_end_matches(".glsl"));
+        let name = format!("{}.spv", entry.trim_end_matches(".glsl"));
         let bytes: &[u8] = bytemuck::cast_slice(&frozen);
-        write_file_atomically(&args.out.join(&file), bytes)?;
-        modules.push(Module {
+        write_file_atomically(&dir.join(&name), bytes)?;
+        println!(
+            "wrote {} ({} bytes)",
+            dir.join(&name).display(),
+            bytes.len()
+        );
+        file.modules.push(Module {
             entry: entry.to_string(),
-            file,
+            file: name,
             bytes: bytes.len(),
         });
     }
-    let spec_file = SpecFile {
-        variant: variant.to_string(),
-        material,
-        modules,
-        constants,
-    };
-    let json = serde_json::to_string_pretty(&spec_file)?;
-    write_file_atomically(&args.out.join("spec.json"), json)?;
-    for m in &spec_file.modules {
-        println!(
-            "wrote {} ({} bytes)",
-            args.out.join(&m.file).display(),
-            m.bytes
-        );
-    }
-    println!("wrote {}", args.out.join("spec.json").display());
+    let json = serde_json::to_string_pretty(&file)?;
+    write_file_atomically(&dir.join("spec.json"), json)?;
+    println!("wrote {}", dir.join("spec.json").display());
     Ok(())
 }
 

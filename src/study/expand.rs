@@ -306,7 +306,8 @@ fn lighting(file: &Path, sweep: &SweepFile, over: &Overrides) -> Result<Lighting
 }
 
 /// Whether the study counts instructions (at which sizes), and the sizes it counts at when
-/// asked to: the suite's where their widths hold whole `tile` periods, else its own.
+/// asked to: the suite's where their widths hold whole `tile` periods and the study does not
+/// keep its own (`own_counter_sizes`), else its own.
 fn counter(
     file: &Path,
     sweep: &SweepFile,
@@ -331,8 +332,8 @@ fn counter(
         ));
     }
     let suite = match &over.counter_sizes {
-        Some(sizes) => Some(parse_counter_sizes(file, sizes)?),
-        None => None,
+        Some(sizes) if !sweep.own_counter_sizes => Some(parse_counter_sizes(file, sizes)?),
+        _ => None,
     };
     let sizes = suite.filter(fits).unwrap_or(own);
     let counter = match over.counter.as_deref().or(sweep.counter.as_deref()) {

@@ -16,6 +16,7 @@
 //! counter_sizes = ["48x48", "96x96"]  # the two counted resolutions (per pixel: the difference)
 //! fit = "linear"                      # optional: report a least-squares line along axis 1
 //! tile_width = 128                    # optional: a suite's sizes apply if their width is a multiple
+//! own_counter_sizes = true            # optional: a suite's counter_sizes do not apply
 //! reference_spp = 64                  # optional: each run's image against the reference image
 //!                                     #   (`render::reference`, this many samples per lobe)
 //! [reference]                         # optional, alone: each material's model against the
@@ -73,6 +74,13 @@ pub struct SweepFile {
     /// `size` or `counter_sizes` whose width is not a multiple of it do not apply to this
     /// study, whose own do; its own must be multiples.
     pub tile_width: Option<u32>,
+    /// The study counts at its own `counter_sizes` whatever a suite says: its materials' maps
+    /// are in texture coordinates, which the full-screen grid stretches over the frame, so a
+    /// patch spans as many pixels as the frame is wide over its scale, and where the patches
+    /// are a few pixels wide nearly every block of pixels mixes two stacks; the per-pixel
+    /// count between two small frames then measures those boundaries more than the stacks.
+    #[serde(default)]
+    pub own_counter_sizes: bool,
     /// Replaced by `counter_sizes`; read only to say so.
     pub counter_size: Option<toml::Value>,
     pub fit: Option<String>,

@@ -66,6 +66,47 @@ fn exported_modules_validate_and_hold_no_specialization_constant() {
     }
 }
 
+/// A varying stack under `mode=specialized` draws a stencil mark and one pipeline per class:
+/// each is exported to its own directory, frozen to its own constants (the class's layer
+/// count, SpecId 8; the mark's layer, SpecId 27).
+#[test]
+fn a_routed_pass_exports_each_of_its_draws() {
+    let dir = common::scratch_dir("export-routed");
+    let out = lamina(
+        &[
+            "export",
+            "--variant",
+            "mode=specialized",
+            "--material",
+            "worn-lacquered-copper",
+            "--out",
+            "x",
+        ],
+        &dir,
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    for (draw, fragment, id, value) in [
+        ("mark-layer-1", "classify.frag.spv", 27, 0),
+        ("class-01", "forward.frag.spv", 8, 2),
+        ("class-00", "forward.frag.spv", 8, 1),
+    ] {
+        for module in ["forward.vert.spv", fragment] {
+            let path = dir.join("x").join(draw).join(module);
+            spirv_val(&path);
+            let words: Vec<u32> = bytemuck::pod_collect_to_vec(&std::fs::read(&path).unwrap());
+            assert_eq!(spec_constant_count(&words).unwrap(), 0, "{draw}: {module}");
+        }
+        let spec: serde_json::Value = serde_json::from_slice(
+            &std::fs::read(dir.join("x").join(draw).join("spec.json")).unwrap(),
+        )
+        .unwrap();
+        assert!(spec["draw"].is_string(), "{draw}: says what it draws");
+        let constants = spec["constants"].as_array().unwrap();
+        let constant = constants.iter().find(|c| c["id"] == id).unwrap();
+        assert_eq!(constant["bits"], value, "{draw}: SpecId {id}");
+    }
+}
+
 #[test]
 fn export_refuses_baked_passes_and_unknown_materials_by_name() {
     let dir = common::scratch_dir("export-refused");

@@ -494,11 +494,11 @@ fn every_committed_sweep_file_expands() {
             continue;
         }
         // The divergence study keeps its own sizes: the suite's widths are not multiples of
-        // its `tile_width`.
-        let (size, counted) = if s.name == "divergence" {
-            ((256, 128), "128x32,128x64")
-        } else {
-            ((160, 90), "24x24,48x48")
+        // its `tile_width`; specialized-maps its own counter sizes (`own_counter_sizes`).
+        let (size, counted) = match s.name.as_str() {
+            "divergence" => ((256, 128), "128x32,128x64"),
+            "specialized-maps" => ((160, 90), "96x96,192x192"),
+            _ => ((160, 90), "24x24,48x48"),
         };
         assert_eq!((s.width, s.height), size, "{}: suite size applies", s.name);
         assert_eq!(
@@ -700,7 +700,7 @@ fn a_study_is_lit_by_its_own_environment() {
     );
 }
 
-/// A combination a pass would refuse (a specialized pipeline for a stack with maps) is refused
+/// A combination a pass would refuse (a baked table for a stack with maps) is refused
 /// when the file is read, naming the file, the field and the material: before any GPU work.
 #[test]
 fn a_study_a_pass_would_refuse_is_refused_before_it_runs() {
@@ -708,7 +708,7 @@ fn a_study_a_pass_would_refuse_is_refused_before_it_runs() {
     std::fs::write(
         dir.join("maps.toml"),
         "name = \"maps\"\nmaterials = [\"gold\", \"worn-lacquered-copper\"]\n\
-         base = \"mode=specialized\"\n[[axis]]\nname = \"ibl\"\nvalues = [\"split-sum\"]\n",
+         base = \"mode=baked\"\n[[axis]]\nname = \"ibl\"\nvalues = [\"split-sum\"]\n",
     )
     .unwrap();
     let out = lamina(&["sweep", "maps.toml", "--dry-run"], &dir);

@@ -23,10 +23,15 @@ pub(super) fn target_ratio<'a>(
     t: &Target,
 ) -> Option<(f64, &'static str, &'a Run, &'a Run)> {
     let r = &s.results;
+    // The ggx baseline answers a pattern only when the pattern names it: `mode=generic,
+    // max_layers=2` means the study's own generic run, not the baseline that shares its axes.
     let on = |pattern: &str| {
-        r.runs
-            .iter()
-            .find(|run| run.material == t.material && run.variant.matches(pattern))
+        let wants_ggx = pattern.split(',').any(|p| p.trim() == "model=ggx");
+        r.runs.iter().find(|run| {
+            run.material == t.material
+                && run.variant.matches(pattern)
+                && (wants_ggx || !run.is_baseline())
+        })
     };
     let run = on(&t.matches)?;
     let against = match &t.against {
