@@ -230,6 +230,18 @@ axis!(
     }
 );
 
+axis!(
+    /// Where the stack is shaded (issue 28).
+    ShadePath, "path", {
+        /// In the fragment shader of the mesh's draw: the talk's.
+        Forward = "forward",
+        /// In compute: the mesh's draw writes a G-buffer (the world position, normal and
+        /// texture coordinates the fragment shader would receive), then one invocation per
+        /// pixel shades what it holds (`render::deferred`).
+        Deferred = "deferred",
+    }
+);
+
 /// The directions `ibl=taps` reads per lobe.
 pub const IBL_TAP_COUNT: u32 = 32;
 
@@ -257,6 +269,8 @@ pub struct VariantKey {
     pub interfaces: Interfaces,
     /// How the environment lights each lobe.
     pub ibl: Ibl,
+    /// Where the stack is shaded: the mesh's fragment shader, or compute over a G-buffer.
+    pub path: ShadePath,
 }
 
 impl Default for VariantKey {
@@ -273,6 +287,7 @@ impl Default for VariantKey {
             transport: Transport::Paper,
             interfaces: Interfaces::Single,
             ibl: Ibl::SplitSum,
+            path: ShadePath::Forward,
         }
     }
 }
@@ -289,6 +304,7 @@ pub const AXES: &[&str] = &[
     "transport",
     "interfaces",
     "ibl",
+    "path",
 ];
 
 /// Layers whose numeric values a `specialized-values` pipeline holds as constants, and the
@@ -496,6 +512,9 @@ impl fmt::Display for VariantKey {
         if self.ibl != Ibl::SplitSum {
             write!(f, ",ibl={}", self.ibl)?;
         }
+        if self.path != ShadePath::Forward {
+            write!(f, ",path={}", self.path)?;
+        }
         Ok(())
     }
 }
@@ -592,6 +611,7 @@ impl VariantKey {
                 "transport" => key.transport = Transport::parse_value(value)?,
                 "interfaces" => key.interfaces = Interfaces::parse_value(value)?,
                 "ibl" => key.ibl = Ibl::parse_value(value)?,
+                "path" => key.path = ShadePath::parse_value(value)?,
                 _ => {
                     return Err(VariantError::UnknownAxis {
                         key: axis.into(),
@@ -673,6 +693,9 @@ mod tests {
                                                 transport,
                                                 interfaces,
                                                 ibl: Ibl::VALUES[keys.len() % Ibl::VALUES.len()].1,
+                                                path: ShadePath::VALUES
+                                                    [keys.len() % ShadePath::VALUES.len()]
+                                                .1,
                                             });
                                         }
                                     }

@@ -44,6 +44,7 @@ struct ComputePush {
 pub const KERNEL: KernelInterface = KernelInterface {
     entry: "calibrate.comp.glsl",
     shades: false,
+    scene: false,
     bindings: &[BindingKind::StorageBuffer],
     push: crate::push_block!(ComputePush { iterations, count }),
     local_size: [LOCAL_SIZE_1D, 1],
@@ -116,7 +117,7 @@ impl Pair {
             fragment: &fragment,
             vertex_stride: 0,
             attributes: &[],
-            color_format: format,
+            color_formats: &[format],
             cull_back: false,
             stencil: None,
         };

@@ -76,8 +76,16 @@ pub fn worker(
             let pass = passes.get(&mut renderer, &keys[i])?;
             // llvmpipe compiles a fragment-shader variant at its first draw with a state (the
             // pipeline, the bound textures' formats and sizes): keep that out with a draw of
-            // the same state, as small as any — its size is not part of the variant.
-            renderer.render(pass, &layers, WARM_UP_SIDE, WARM_UP_SIDE)?;
+            // the same state, as small as any — its size is not part of the variant. A
+            // deferred pass's kernel samples the G-buffer, whose size is the frame's, and
+            // llvmpipe keys a kernel's variant on whether its images' sides are powers of two:
+            // its warm-up frame has the counted size.
+            let (w, h) = if pass.deferred.is_some() {
+                (width, height)
+            } else {
+                (WARM_UP_SIDE, WARM_UP_SIDE)
+            };
+            renderer.render(pass, &layers, w, h)?;
             renderer.render_observed(pass, &layers, width, height, &mut |phase| match phase {
                 ShadedPhase::Before => callgrind::start_instrumentation(),
                 ShadedPhase::After => callgrind::stop_instrumentation(),

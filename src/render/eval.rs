@@ -77,6 +77,7 @@ struct Push {
 pub const KERNEL: KernelInterface = KernelInterface {
     entry: "tm_eval.comp.glsl",
     shades: true,
+    scene: false,
     bindings: &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
     push: crate::push_block!(Push {
         sample_count,

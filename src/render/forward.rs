@@ -7,10 +7,11 @@
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::shader::specialize::BakedShape;
-use crate::variant::ShadeSpec;
-use crate::vk::{Format, GraphicsDesc, Pipeline, PipelineLayout, StencilUse};
+use crate::variant::{ShadePath, ShadeSpec};
+use crate::vk::{DescriptorSetLayout, Format, GraphicsDesc, Pipeline, PipelineLayout, StencilUse};
 
 use super::baked::{BakedTable, BakedTexture};
+use super::deferred::{DeferredPipelines, GBUFFER_ENTRY, GBUFFER_FORMAT};
 use super::pass::{MaterialKey, PassKey};
 use super::scene::Vertex;
 
@@ -36,6 +37,8 @@ pub struct ForwardPass {
     /// The draw whose pipeline the bench reports (a routed pass's class with the most
     /// layers).
     main: usize,
+    /// `path=deferred`: the G-buffer's draw and the shading kernel, in place of `draws`.
+    pub deferred: Option<DeferredPipelines>,
     /// Size of the fragment shader's SPIR-V.
     pub spirv_bytes: usize,
     /// `mode=baked` and the reference pass: the lobe table, on the host and in the texture
@@ -45,10 +48,13 @@ pub struct ForwardPass {
 
 impl ForwardPass {
     /// The pass of `key`, reading `baked` where the key is `mode=baked`'s or a reference's
-    /// (whose table holds two rows per lobe, `render::reference::lobe_table`).
+    /// (whose table holds two rows per lobe, `render::reference::lobe_table`). `layout` is
+    /// the graphics pipelines' (the `shared` shading and scene sets), which the deferred
+    /// path's kernel shares.
     pub fn new(
         gpu: &Gpu,
         layout: &PipelineLayout,
+        shared: [&DescriptorSetLayout; 2],
         color_format: Format,
         key: PassKey,
         baked: Option<(BakedTable, BakedTexture)>,
@@ -90,12 +96,58 @@ impl ForwardPass {
                         (1, Format::R32G32B32_SFLOAT, 12),
                         (2, Format::R32G32_SFLOAT, 24),
                     ],
-                    color_format,
+                    color_formats: &[color_format],
                     cull_back: true,
                     stencil,
                 };
                 gpu.graphics_pipeline(layout, &desc, spec, name)
             };
+        if variant.path == ShadePath::Deferred {
+            if matches!(key.material, MaterialKey::Classes(_)) {
+                return Err(Error::Unsupported(format!(
+                    "variant {variant}: a varying stack under mode=specialized shades each \
+                     class of pixels with its own pipeline, which the deferred path does not \
+                     classify yet; shade it with path=forward, or under mode=generic"
+                )));
+            }
+            if reference {
+                return Err(Error::Unsupported(
+                    "the reference image is drawn by the forward path only".into(),
+                ));
+            }
+            let gbuffer_fragment = gpu.shaders.compile(GBUFFER_ENTRY, &defines)?;
+            let spec = key.spec(shape);
+            let desc = GraphicsDesc {
+                vertex: &vertex,
+                fragment: &gbuffer_fragment,
+                vertex_stride: std::mem::size_of::<Vertex>() as u32,
+                attributes: &[
+                    (0, Format::R32G32B32_SFLOAT, 0),
+                    (1, Format::R32G32B32_SFLOAT, 12),
+                    (2, Format::R32G32_SFLOAT, 24),
+                ],
+                color_formats: &[GBUFFER_FORMAT; 2],
+                cull_back: true,
+                stencil: None,
+            };
+            let gbuffer =
+                gpu.graphics_pipeline(layout, &desc, &spec, &format!("g-buffer {variant}"))?;
+            let deferred =
+                DeferredPipelines::new(gpu, gbuffer, shared, spec, &defines, color_format)?;
+            let spirv_bytes = gpu
+                .shaders
+                .compile(super::deferred::KERNEL.entry, &defines)?
+                .len()
+                * 4;
+            return Ok(Self {
+                key,
+                draws: Vec::new(),
+                main: 0,
+                deferred: Some(deferred),
+                spirv_bytes,
+                baked,
+            });
+        }
         let (draws, main) = match &key.material {
             MaterialKey::Classes(routing) => {
                 if !gpu.device.supports_stencil_target() {
@@ -156,6 +208,7 @@ impl ForwardPass {
             key,
             draws,
             main,
+            deferred: None,
             spirv_bytes: fragment.len() * 4,
             baked,
         })
@@ -164,7 +217,19 @@ impl ForwardPass {
     /// The pipeline the bench reports: the only one, or a routed pass's class with the most
     /// layers.
     pub fn pipeline(&self) -> &Pipeline {
-        &self.draws[self.main].pipeline
+        match &self.deferred {
+            Some(d) => &d.kernel.pipeline,
+            None => &self.draws[self.main].pipeline,
+        }
+    }
+
+    /// Every pipeline the pass made.
+    fn pipelines(&self) -> impl Iterator<Item = &Pipeline> {
+        let deferred = self
+            .deferred
+            .iter()
+            .flat_map(|d| [&d.gbuffer, &d.kernel.pipeline]);
+        self.draws.iter().map(|d| &d.pipeline).chain(deferred)
     }
 
     /// Whether the pass routes pixels by a stencil (`render::classes`).
@@ -174,18 +239,16 @@ impl ForwardPass {
 
     /// Host time of every pipeline's creation, in milliseconds.
     pub fn creation_ms(&self) -> f64 {
-        self.draws
-            .iter()
-            .map(|d| d.pipeline.creation.duration.as_secs_f64() * 1e3)
+        self.pipelines()
+            .map(|p| p.creation.duration.as_secs_f64() * 1e3)
             .sum()
     }
 
     /// Whether the driver found every pipeline in the pipeline cache (`None` where one's
     /// feedback is not valid).
     pub fn cache_hit(&self) -> Option<bool> {
-        self.draws
-            .iter()
-            .map(|d| d.pipeline.creation.cache_hit)
+        self.pipelines()
+            .map(|p| p.creation.cache_hit)
             .try_fold(true, |all, hit| hit.map(|h| all && h))
     }
 }

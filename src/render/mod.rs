@@ -3,6 +3,7 @@
 
 pub mod baked;
 pub mod classes;
+pub mod deferred;
 pub mod eval;
 pub mod forward;
 pub mod furnace;

@@ -23,11 +23,12 @@ use crate::tables::lobe_moments::LobeMomentsTable;
 use crate::variant::{Ibl, Mode, Model, Transport, VariantKey};
 use crate::vk::{
     submit_and_wait, texel_bytes, Access, Buffer, BufferDesc, BufferUsageFlags, DescriptorSet,
-    DescriptorSetLayout, Format, GpuProfiler, Image, ImageDesc, ImageState, ImageView,
-    PipelineLayout, Resource, Sampler, SamplerDesc, ScopeTiming, Stages,
+    DescriptorSetLayout, Format, GpuProfiler, Image, ImageDesc, ImageState, ImageUsageFlags,
+    ImageView, PipelineLayout, Recorder, Resource, Sampler, SamplerDesc, ScopeTiming, Stages,
 };
 
 use super::baked::{self, BakedTable, BakedTexture};
+use super::deferred::{DeferredPipelines, DeferredPush, GBUFFER_FORMAT};
 use super::forward::ForwardPass;
 use super::inputs::ShadingInputs;
 use super::lights::{lights_block, Lighting};
@@ -126,10 +127,11 @@ impl<'g> Renderer<'g> {
         let environment = Environment::build(gpu, equirect, env)?;
         let moments = LobeMomentsTable::load_or_build(gpu)?;
         let inputs = ShadingInputs::new(gpu)?;
+        // Read by the graphics passes and by the deferred path's shading kernel.
         let scene_layout = DescriptorSetLayout::new(
             device,
             &SCENE_BINDINGS.map(|b| b.kind),
-            Stages::Graphics,
+            Stages::All,
             "scene",
         )?;
         let layout = PipelineLayout::new(
@@ -299,7 +301,14 @@ impl<'g> Renderer<'g> {
     }
 
     fn pass(&self, key: PassKey, baked: Option<(BakedTable, BakedTexture)>) -> Result<ForwardPass> {
-        ForwardPass::new(self.gpu, &self.layout, self.target.format(), key, baked)
+        ForwardPass::new(
+            self.gpu,
+            &self.layout,
+            [&self.inputs.layout.set_layout, &self.scene_layout],
+            self.target.format(),
+            key,
+            baked,
+        )
     }
 
     /// Renders one frame of the stack `layers` (top first) with a prepared pass.
@@ -329,11 +338,12 @@ impl<'g> Renderer<'g> {
         let sets = self.frame_sets(pass, layers, width, height)?;
         let device = &self.gpu.device;
         let format = self.target.format();
-        let target = Image::new(
-            device,
-            ImageDesc::render_target(format, width, height),
-            "render target",
-        )?;
+        let mut target_desc = ImageDesc::render_target(format, width, height);
+        if pass.deferred.is_some() {
+            // The deferred path's kernel writes it as a storage image.
+            target_desc = target_desc.usage(target_desc.usage | ImageUsageFlags::STORAGE);
+        }
+        let target = Image::new(device, target_desc, "render target")?;
         let target_view = target.view("render target")?;
         let readback = Buffer::new(
             device,
@@ -344,6 +354,56 @@ impl<'g> Renderer<'g> {
 
         self.draw_sky(&sets, &target, &target_view, &mut profiler)?;
 
+        if let Some(deferred) = &pass.deferred {
+            let gbuffer = GBuffer::new(
+                self.gpu,
+                deferred,
+                &target_view,
+                &self.sampler,
+                width,
+                height,
+            )?;
+            observe(ShadedPhase::Before);
+            submit_and_wait(device, "shaded", |rec| {
+                let scope = profiler
+                    .begin(rec, "shaded")
+                    .expect("the sky scope is closed");
+                self.record_deferred(rec, deferred, &sets, &gbuffer, &target, width, height);
+                profiler.end(rec, scope);
+                Ok(())
+            })?;
+        } else {
+            observe(ShadedPhase::Before);
+            self.submit_forward(pass, &sets, &target_view, &mut profiler, width, height)?;
+        }
+        observe(ShadedPhase::After);
+
+        let mut scopes = profiler.results()?.into_iter();
+        let (sky, shaded) = (
+            scopes.next().expect("sky scope"),
+            scopes.next().expect("shaded scope"),
+        );
+        Ok(RenderedFrame {
+            width,
+            height,
+            pixels: self.read_back(&target, &readback)?,
+            sky,
+            shaded,
+        })
+    }
+
+    /// Records and submits the forward path's draws of `pass` into `target_view`, timed in
+    /// `profiler`'s second scope (a routed pass's stencil made and cleared with them).
+    fn submit_forward(
+        &self,
+        pass: &ForwardPass,
+        sets: &FrameSets,
+        target_view: &ImageView,
+        profiler: &mut GpuProfiler,
+        width: u32,
+        height: u32,
+    ) -> Result<()> {
+        let device = &self.gpu.device;
         // A routed pass's stencil, cleared when its rendering begins.
         let stencil = if pass.routed() {
             let image = Image::new(
@@ -356,7 +416,6 @@ impl<'g> Renderer<'g> {
         } else {
             None
         };
-        observe(ShadedPhase::Before);
         submit_and_wait(device, "shaded", |rec| {
             if let Some((image, _)) = &stencil {
                 rec.transition(
@@ -371,9 +430,9 @@ impl<'g> Renderer<'g> {
                 .expect("the sky scope is closed");
             match &stencil {
                 Some((_, view)) => {
-                    rec.begin_rendering_load_stencil(&target_view, view, width, height)
+                    rec.begin_rendering_load_stencil(target_view, view, width, height)
                 }
-                None => rec.begin_rendering_load(&target_view, width, height),
+                None => rec.begin_rendering_load(target_view, width, height),
             }
             rec.bind_vertex_buffer(&self.vertices);
             rec.bind_index_buffer_u32(&self.indices);
@@ -390,20 +449,70 @@ impl<'g> Renderer<'g> {
             profiler.end(rec, scope);
             Ok(())
         })?;
-        observe(ShadedPhase::After);
+        Ok(())
+    }
 
-        let mut scopes = profiler.results()?.into_iter();
-        let (sky, shaded) = (
-            scopes.next().expect("sky scope"),
-            scopes.next().expect("shaded scope"),
-        );
-        Ok(RenderedFrame {
+    /// Records the deferred path: the mesh into the G-buffer, then the shading kernel over
+    /// every pixel into `target` (which the sky left as a colour attachment, and which is
+    /// left as one).
+    #[allow(clippy::too_many_arguments)]
+    fn record_deferred(
+        &self,
+        rec: &mut Recorder<'_>,
+        deferred: &DeferredPipelines,
+        sets: &FrameSets,
+        gbuffer: &GBuffer,
+        target: &Image,
+        width: u32,
+        height: u32,
+    ) {
+        for image in &gbuffer.images {
+            rec.transition(
+                image,
+                0..1,
+                ImageState::Undefined,
+                ImageState::ColorAttachment,
+            );
+        }
+        rec.begin_rendering_targets(
+            &[&gbuffer.views[0], &gbuffer.views[1]],
             width,
             height,
-            pixels: self.read_back(&target, &readback)?,
-            sky,
-            shaded,
-        })
+            [0.0; 4],
+        );
+        rec.bind_pipeline(&deferred.gbuffer);
+        rec.bind_set(&deferred.gbuffer, &self.layout, SHADING_SET, &sets.shading);
+        rec.bind_set(&deferred.gbuffer, &self.layout, SCENE_SET, &sets.scene);
+        rec.bind_vertex_buffer(&self.vertices);
+        rec.bind_index_buffer_u32(&self.indices);
+        rec.draw_indexed(self.index_count);
+        rec.end_rendering();
+        for image in &gbuffer.images {
+            rec.transition(
+                image,
+                0..1,
+                ImageState::ColorAttachment,
+                ImageState::ComputeRead,
+            );
+        }
+        rec.transition(
+            target,
+            0..1,
+            ImageState::ColorAttachment,
+            ImageState::ComputeWrite,
+        );
+        deferred.kernel.record_dispatch(
+            rec,
+            &[&sets.shading, &sets.scene, &gbuffer.set],
+            &DeferredPush { width, height },
+            [width, height, 1],
+        );
+        rec.transition(
+            target,
+            0..1,
+            ImageState::ComputeWrite,
+            ImageState::ColorAttachment,
+        );
     }
 
     /// Records and submits the sky into `target` (cleared first), timed in `profiler`'s
@@ -622,4 +731,40 @@ struct FrameSets {
     shading: DescriptorSet,
     scene: DescriptorSet,
     _buffers: [Buffer; 3],
+}
+
+/// A deferred frame's G-buffer: its two attachments and the kernel's own set over them and
+/// the render target.
+struct GBuffer {
+    images: [Image; 2],
+    views: [ImageView; 2],
+    set: DescriptorSet,
+}
+
+impl GBuffer {
+    fn new(
+        gpu: &Gpu,
+        deferred: &DeferredPipelines,
+        target_view: &ImageView,
+        sampler: &Sampler,
+        width: u32,
+        height: u32,
+    ) -> Result<Self> {
+        let device = &gpu.device;
+        let desc = ImageDesc::new_2d(GBUFFER_FORMAT, width, height)
+            .usage(ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::SAMPLED);
+        let images = [
+            Image::new(device, desc, "g-buffer position")?,
+            Image::new(device, desc, "g-buffer normal")?,
+        ];
+        let views = [
+            images[0].view("g-buffer position")?,
+            images[1].view("g-buffer normal")?,
+        ];
+        let mut set = DescriptorSet::new(device, &deferred.kernel.set_layout, "g-buffer")?;
+        set.write(0, Resource::Sampled(&views[0], sampler))
+            .write(1, Resource::Sampled(&views[1], sampler))
+            .write(2, Resource::Storage(target_view));
+        Ok(Self { images, views, set })
+    }
 }

@@ -21,7 +21,7 @@ impl SkyPass {
             fragment: &fragment,
             vertex_stride: 0,
             attributes: &[],
-            color_format,
+            color_formats: &[color_format],
             cull_back: false,
             stencil: None,
         };

@@ -64,10 +64,11 @@ impl WorkGroupSpec for KernelSpec {
     }
 }
 
-/// The shading passes' constants: the compute entry points that shade are one-dimensional.
+/// The shading passes' constants carry the work group's width only: a shading kernel's
+/// height is 1, or fixed in its source where it has rows (`deferred.comp.glsl`'s, which its
+/// interface states and tests/suite/reflection.rs holds to the SPIR-V).
 impl WorkGroupSpec for ShadeSpec {
-    fn with_local_size(self, [x, y]: [u32; 2]) -> Self {
-        assert_eq!(y, 1, "a shading kernel's work group is one-dimensional");
+    fn with_local_size(self, [x, _]: [u32; 2]) -> Self {
         Self {
             local_size_x: x,
             ..self
@@ -120,6 +121,9 @@ pub struct KernelInterface {
     /// Whether set 0 is the shading set (`shader::interface::SHADING_BINDINGS`); the kernel's
     /// own set follows the shared ones.
     pub shades: bool,
+    /// Whether the scene set (`shader::interface::SCENE_BINDINGS`: frame constants, the
+    /// environment, the lights) follows the shading set: a kernel that lights what it shades.
+    pub scene: bool,
     /// The kernel's own set, binding i = element i.
     pub bindings: &'static [BindingKind],
     pub push: PushBlock,
@@ -130,7 +134,7 @@ pub struct KernelInterface {
 impl KernelInterface {
     /// The index of the kernel's own descriptor set.
     pub fn own_set(&self) -> u32 {
-        u32::from(self.shades)
+        u32::from(self.shades) + u32::from(self.scene)
     }
 
     /// Work groups covering `invocations` (x, y, z) with this kernel's work-group size.
@@ -154,6 +158,7 @@ pub const LOCAL_SIZE_1D: u32 = 64;
 pub const SPEC_ARRAY: KernelInterface = KernelInterface {
     entry: "spec_array.comp.glsl",
     shades: false,
+    scene: false,
     bindings: &[BindingKind::StorageBuffer],
     push: PushBlock::NONE,
     local_size: [1, 1],

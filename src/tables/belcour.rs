@@ -228,6 +228,7 @@ struct BelcourPush {
 pub const BELCOUR_KERNEL: KernelInterface = KernelInterface {
     entry: "fgd_belcour.comp.glsl",
     shades: false,
+    scene: false,
     bindings: &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
     push: crate::push_block!(BelcourPush {
         size,

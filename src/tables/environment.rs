@@ -70,6 +70,7 @@ struct PrefilterPush {
 pub const CONVERT_KERNEL: KernelInterface = KernelInterface {
     entry: "equirect_to_cube.comp.glsl",
     shades: false,
+    scene: false,
     bindings: &[BindingKind::SampledImage, BindingKind::StorageImage],
     push: crate::push_block!(ConvertPush { face_size }),
     local_size: [LOCAL_SIZE_2D, LOCAL_SIZE_2D],
@@ -79,6 +80,7 @@ pub const CONVERT_KERNEL: KernelInterface = KernelInterface {
 pub const PREFILTER_KERNEL: KernelInterface = KernelInterface {
     entry: "prefilter.comp.glsl",
     shades: false,
+    scene: false,
     bindings: &[BindingKind::SampledImage, BindingKind::StorageImage],
     push: crate::push_block!(PrefilterPush {
         alpha,

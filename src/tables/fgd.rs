@@ -136,6 +136,7 @@ struct GridPush {
 pub const GRID_KERNEL: KernelInterface = KernelInterface {
     entry: "fgd_table.comp.glsl",
     shades: false,
+    scene: false,
     bindings: &[BindingKind::StorageBuffer],
     push: crate::push_block!(GridPush {
         dims,
@@ -558,6 +559,7 @@ struct ProbePush {
 pub const PROBE_KERNEL: KernelInterface = KernelInterface {
     entry: "fgd_probe.comp.glsl",
     shades: true,
+    scene: false,
     bindings: &[BindingKind::StorageBuffer, BindingKind::StorageBuffer],
     push: crate::push_block!(ProbePush { count }),
     local_size: [LOCAL_SIZE_1D, 1],

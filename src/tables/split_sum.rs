@@ -34,6 +34,7 @@ struct Push {
 pub const KERNEL: KernelInterface = KernelInterface {
     entry: "split_sum.comp.glsl",
     shades: false,
+    scene: false,
     bindings: &[BindingKind::StorageBuffer],
     push: crate::push_block!(Push { size, sample_count }),
     local_size: [LOCAL_SIZE_2D, LOCAL_SIZE_2D],

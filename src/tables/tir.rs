@@ -50,6 +50,7 @@ struct Push {
 pub const KERNEL: KernelInterface = KernelInterface {
     entry: "tir_table.comp.glsl",
     shades: false,
+    scene: false,
     bindings: &[BindingKind::StorageBuffer],
     push: crate::push_block!(Push {
         size,

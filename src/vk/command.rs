@@ -239,7 +239,20 @@ impl Recorder<'_> {
         width: u32,
         height: u32,
     ) {
-        self.begin_rendering_with(target.raw, Some(stencil.raw), width, height, None);
+        self.begin_rendering_with(&[target.raw], Some(stencil.raw), width, height, None);
+    }
+
+    /// Begins dynamic rendering into `targets` (each in `ColorAttachment` state), attachment i
+    /// at location i, each cleared to `clear`.
+    pub fn begin_rendering_targets(
+        &mut self,
+        targets: &[&ImageView],
+        width: u32,
+        height: u32,
+        clear: [f32; 4],
+    ) {
+        let raw: Vec<vk::ImageView> = targets.iter().map(|t| t.raw).collect();
+        self.begin_rendering_with(&raw, None, width, height, Some(clear));
     }
 
     pub(crate) fn begin_rendering_raw(
@@ -249,31 +262,36 @@ impl Recorder<'_> {
         height: u32,
         clear: Option<[f32; 4]>,
     ) {
-        self.begin_rendering_with(target, None, width, height, clear);
+        self.begin_rendering_with(&[target], None, width, height, clear);
     }
 
     fn begin_rendering_with(
         &mut self,
-        target: vk::ImageView,
+        targets: &[vk::ImageView],
         stencil: Option<vk::ImageView>,
         width: u32,
         height: u32,
         clear: Option<[f32; 4]>,
     ) {
-        let attachments = [vk::RenderingAttachmentInfo::default()
-            .image_view(target)
-            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-            .load_op(if clear.is_some() {
-                vk::AttachmentLoadOp::CLEAR
-            } else {
-                vk::AttachmentLoadOp::LOAD
+        let attachments: Vec<_> = targets
+            .iter()
+            .map(|&target| {
+                vk::RenderingAttachmentInfo::default()
+                    .image_view(target)
+                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                    .load_op(if clear.is_some() {
+                        vk::AttachmentLoadOp::CLEAR
+                    } else {
+                        vk::AttachmentLoadOp::LOAD
+                    })
+                    .store_op(vk::AttachmentStoreOp::STORE)
+                    .clear_value(vk::ClearValue {
+                        color: vk::ClearColorValue {
+                            float32: clear.unwrap_or_default(),
+                        },
+                    })
             })
-            .store_op(vk::AttachmentStoreOp::STORE)
-            .clear_value(vk::ClearValue {
-                color: vk::ClearColorValue {
-                    float32: clear.unwrap_or_default(),
-                },
-            })];
+            .collect();
         let area = vk::Rect2D {
             offset: vk::Offset2D { x: 0, y: 0 },
             extent: vk::Extent2D { width, height },

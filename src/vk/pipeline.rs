@@ -255,8 +255,11 @@ impl Pipeline {
         } else {
             vk::ColorComponentFlags::RGBA
         };
-        let blend_attachments =
-            [vk::PipelineColorBlendAttachmentState::default().color_write_mask(writes)];
+        let blend_attachments: Vec<_> = desc
+            .color_formats
+            .iter()
+            .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(writes))
+            .collect();
         let blend =
             vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
         let states = if desc.stencil.is_some() {
@@ -265,9 +268,8 @@ impl Pipeline {
             &DYNAMIC_STATES[..]
         };
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(states);
-        let color_formats = [desc.color_format];
         let mut rendering =
-            vk::PipelineRenderingCreateInfo::default().color_attachment_formats(&color_formats);
+            vk::PipelineRenderingCreateInfo::default().color_attachment_formats(desc.color_formats);
         if desc.stencil.is_some() {
             rendering = rendering.stencil_attachment_format(super::STENCIL_FORMAT);
         }
@@ -533,7 +535,8 @@ pub struct GraphicsDesc<'a> {
     pub vertex_stride: u32,
     /// (location, format, byte offset) of each attribute.
     pub attributes: &'a [(u32, vk::Format, u32)],
-    pub color_format: vk::Format,
+    /// One per colour attachment, in location order.
+    pub color_formats: &'a [vk::Format],
     pub cull_back: bool,
     /// What the pipeline does with a stencil attachment (`STENCIL_FORMAT`) of its rendering
     /// scope; `None`: the scope has none.

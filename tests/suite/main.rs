@@ -7,6 +7,7 @@ mod common;
 
 mod capture;
 mod cli;
+mod deferred;
 mod device;
 mod diffuse;
 mod environment;

@@ -20,7 +20,7 @@ use std::collections::BTreeMap;
 use std::mem::{offset_of, size_of};
 
 use lamina::profile::calibrate;
-use lamina::render::eval;
+use lamina::render::{deferred, eval};
 use lamina::shader::interface::{
     FrameConstants, LayerGpu, MaterialGpu, SCENE_BINDINGS, SCENE_SET, SHADING_BINDINGS,
     SHADING_SET, TRANSPORT_OFFSET, TRANSPORT_ROWS, TRANSPORT_SEGMENTS,
@@ -273,6 +273,7 @@ fn kernels() -> Vec<KernelInterface> {
         fgd::BELCOUR_KERNEL,
         fgd::PROBE_KERNEL,
         eval::KERNEL,
+        deferred::KERNEL,
         kernel::SPEC_ARRAY,
         calibrate::KERNEL,
     ]
@@ -280,12 +281,22 @@ fn kernels() -> Vec<KernelInterface> {
 
 /// The define sets an entry point is compiled with: the shading passes also in fp16.
 fn define_sets(entry: &str) -> Vec<Vec<(&'static str, &'static str)>> {
-    let shades = ["forward.frag.glsl", "tm_eval.comp.glsl"];
+    let shades = [
+        "forward.frag.glsl",
+        "tm_eval.comp.glsl",
+        "deferred.comp.glsl",
+    ];
     if entry == "forward.frag.glsl" {
         vec![
             vec![],
             vec![("LAMINA_FP16", "1")],
             vec![("LAMINA_REFERENCE", "1")],
+        ]
+    } else if entry == "deferred.comp.glsl" {
+        vec![
+            vec![],
+            vec![("LAMINA_FP16", "1")],
+            vec![("LAMINA_TARGET_RGBA32F", "1")],
         ]
     } else if shades.contains(&entry) {
         vec![vec![], vec![("LAMINA_FP16", "1")]]
@@ -366,6 +377,9 @@ fn every_compute_kernel_matches_its_interface() {
         let mut sets = BTreeMap::new();
         if k.shades {
             sets.insert(SHADING_SET, kinds_in_order(&SHADING_BINDINGS));
+        }
+        if k.scene {
+            sets.insert(SCENE_SET, kinds_in_order(&SCENE_BINDINGS));
         }
         sets.insert(k.own_set(), k.bindings.to_vec());
         // The kernels that shade (and the MAX_LAYERS array test) read ShadeSpec, whose id 6
