@@ -61,58 +61,13 @@ impl Routing {
         layers: &[LayerParams],
         maps: &SurfaceMaps,
     ) -> Result<Self, SpecializeError> {
-        // Per layer: None (no coverage, or one that holds it everywhere), Some(None) (held
-        // nowhere), or the bit of the coverage map it shares.
-        let mut groups: Vec<(usize, Vec<bool>, bool)> = Vec::new();
-        let mut presence: Vec<Option<Option<usize>>> = Vec::with_capacity(layers.len());
-        for i in 0..layers.len() {
-            let Some((held, screen)) = maps.coverage_texels(i) else {
-                presence.push(None);
-                continue;
-            };
-            if held.iter().all(|&h| h) {
-                presence.push(None);
-            } else if held.iter().all(|&h| !h) {
-                presence.push(Some(None));
-            } else {
-                let k = match groups
-                    .iter()
-                    .position(|(_, h, s)| *h == held && *s == screen)
-                {
-                    Some(k) => k,
-                    None => {
-                        groups.push((i, held, screen));
-                        groups.len() - 1
-                    }
-                };
-                presence.push(Some(Some(k)));
-            }
-        }
+        let (groups, presence) = coverage_groups(maps, layers.len());
         if groups.len() > STENCIL_BITS {
             return Err(SpecializeError::TooManyCoverages {
                 count: groups.len(),
                 bits: STENCIL_BITS,
             });
         }
-        let combos: BTreeSet<u32> = if groups.windows(2).all(|w| w[0].2 == w[1].2) {
-            let texels = groups.first().map_or(0, |(_, held, _)| held.len());
-            (0..texels)
-                .map(|t| {
-                    groups
-                        .iter()
-                        .enumerate()
-                        .filter(|(_, (_, held, _))| held[t])
-                        .fold(0, |bits, (k, _)| bits | 1 << k)
-                })
-                .collect()
-        } else {
-            (0..1u32 << groups.len()).collect()
-        };
-        let combos = if groups.is_empty() {
-            BTreeSet::from([0])
-        } else {
-            combos
-        };
         let spreads: Vec<Spread> = (0..layers.len())
             .map(|i| Spread {
                 ior: maps.range(i, Field::Ior),
@@ -120,16 +75,16 @@ impl Routing {
                 depth: maps.range(i, Field::Depth),
             })
             .collect();
-        let mut classes = combos
+        let mut classes = combinations(&groups)
             .into_iter()
             .map(|bits| {
                 let present: Vec<usize> = presence
                     .iter()
                     .enumerate()
                     .filter(|(_, p)| match p {
-                        None => true,
-                        Some(None) => false,
-                        Some(Some(k)) => bits & (1 << k) != 0,
+                        Presence::Always => true,
+                        Presence::Never => false,
+                        Presence::Marked(k) => bits & (1 << k) != 0,
                     })
                     .map(|(i, _)| i)
                     .collect();
@@ -155,7 +110,7 @@ impl Routing {
                 .then(a.bits.cmp(&b.bits))
         });
         Ok(Self {
-            marks: groups.into_iter().map(|(i, _, _)| i).collect(),
+            marks: groups.into_iter().map(|g| g.layer).collect(),
             classes,
         })
     }
@@ -164,6 +119,76 @@ impl Routing {
     pub fn compare_mask(&self) -> u32 {
         (1u32 << self.marks.len()) - 1
     }
+}
+
+/// Where a layer is, by its coverage.
+enum Presence {
+    /// Everywhere: no coverage, or one that holds it at every texel.
+    Always,
+    /// Nowhere: a coverage that holds it at no texel.
+    Never,
+    /// Where stencil bit k (its coverage map's group) is set.
+    Marked(usize),
+}
+
+/// The coverage maps that differ over the surface, equal ones once: each marks a bit.
+struct Group {
+    /// The first layer with this map, whose coverage the mark tests.
+    layer: usize,
+    /// The map, texel by texel.
+    held: Vec<bool>,
+    /// Read in screen coordinates.
+    screen: bool,
+}
+
+/// The groups of `maps`' varying coverages, and each of its `count` layers' presence.
+fn coverage_groups(maps: &SurfaceMaps, count: usize) -> (Vec<Group>, Vec<Presence>) {
+    let mut groups: Vec<Group> = Vec::new();
+    let presence = (0..count)
+        .map(|i| {
+            let Some((held, screen)) = maps.coverage_texels(i) else {
+                return Presence::Always;
+            };
+            if held.iter().all(|&h| h) {
+                return Presence::Always;
+            }
+            if held.iter().all(|&h| !h) {
+                return Presence::Never;
+            }
+            let found = groups
+                .iter()
+                .position(|g| g.held == held && g.screen == screen);
+            Presence::Marked(found.unwrap_or_else(|| {
+                groups.push(Group {
+                    layer: i,
+                    held,
+                    screen,
+                });
+                groups.len() - 1
+            }))
+        })
+        .collect();
+    (groups, presence)
+}
+
+/// The combinations of the groups' bits that occur: over the texels when every map is read
+/// in the same coordinates (a pixel then reads the same texel of each), else all of them.
+fn combinations(groups: &[Group]) -> BTreeSet<u32> {
+    if groups.is_empty() {
+        return BTreeSet::from([0]);
+    }
+    if groups.windows(2).any(|w| w[0].screen != w[1].screen) {
+        return (0..1u32 << groups.len()).collect();
+    }
+    (0..groups[0].held.len())
+        .map(|t| {
+            groups
+                .iter()
+                .enumerate()
+                .filter(|(_, g)| g.held[t])
+                .fold(0, |bits, (k, _)| bits | 1 << k)
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -11,7 +11,8 @@ use crate::variant::{ShadePath, ShadeSpec};
 use crate::vk::{DescriptorSetLayout, Format, GraphicsDesc, Pipeline, PipelineLayout, StencilUse};
 
 use super::baked::{BakedTable, BakedTexture};
-use super::deferred::{DeferredPipelines, GBUFFER_ENTRY, GBUFFER_FORMAT};
+use super::classes::Routing;
+use super::deferred::{DeferredPipelines, GBUFFER_ENTRY, GBUFFER_FORMAT, KERNEL};
 use super::pass::{MaterialKey, PassKey};
 use super::scene::Vertex;
 
@@ -83,62 +84,16 @@ impl ForwardPass {
         if reference {
             defines.push(("LAMINA_REFERENCE", "1"));
         }
-        let vertex = gpu.shaders.compile(ENTRIES[0], &defines)?;
-        let fragment = gpu.shaders.compile(ENTRIES[1], &defines)?;
-        let build =
-            |fragment: &[u32], stencil: Option<StencilUse>, spec: &ShadeSpec, name: &str| {
-                let desc = GraphicsDesc {
-                    vertex: &vertex,
-                    fragment,
-                    vertex_stride: std::mem::size_of::<Vertex>() as u32,
-                    attributes: &[
-                        (0, Format::R32G32B32_SFLOAT, 0),
-                        (1, Format::R32G32B32_SFLOAT, 12),
-                        (2, Format::R32G32_SFLOAT, 24),
-                    ],
-                    color_formats: &[color_format],
-                    cull_back: true,
-                    stencil,
-                };
-                gpu.graphics_pipeline(layout, &desc, spec, name)
-            };
+        let builder = Builder {
+            gpu,
+            layout,
+            vertex: gpu.shaders.compile(ENTRIES[0], &defines)?,
+            color_format,
+        };
+        let spec = key.spec(shape);
         if variant.path == ShadePath::Deferred {
-            if matches!(key.material, MaterialKey::Classes(_)) {
-                return Err(Error::Unsupported(format!(
-                    "variant {variant}: a varying stack under mode=specialized shades each \
-                     class of pixels with its own pipeline, which the deferred path does not \
-                     classify yet; shade it with path=forward, or under mode=generic"
-                )));
-            }
-            if reference {
-                return Err(Error::Unsupported(
-                    "the reference image is drawn by the forward path only".into(),
-                ));
-            }
-            let gbuffer_fragment = gpu.shaders.compile(GBUFFER_ENTRY, &defines)?;
-            let spec = key.spec(shape);
-            let desc = GraphicsDesc {
-                vertex: &vertex,
-                fragment: &gbuffer_fragment,
-                vertex_stride: std::mem::size_of::<Vertex>() as u32,
-                attributes: &[
-                    (0, Format::R32G32B32_SFLOAT, 0),
-                    (1, Format::R32G32B32_SFLOAT, 12),
-                    (2, Format::R32G32_SFLOAT, 24),
-                ],
-                color_formats: &[GBUFFER_FORMAT; 2],
-                cull_back: true,
-                stencil: None,
-            };
-            let gbuffer =
-                gpu.graphics_pipeline(layout, &desc, &spec, &format!("g-buffer {variant}"))?;
-            let deferred =
-                DeferredPipelines::new(gpu, gbuffer, shared, spec, &defines, color_format)?;
-            let spirv_bytes = gpu
-                .shaders
-                .compile(super::deferred::KERNEL.entry, &defines)?
-                .len()
-                * 4;
+            let deferred = builder.deferred(&key, shared, spec, &defines)?;
+            let spirv_bytes = gpu.shaders.compile(KERNEL.entry, &defines)?.len() * 4;
             return Ok(Self {
                 key,
                 draws: Vec::new(),
@@ -148,53 +103,12 @@ impl ForwardPass {
                 baked,
             });
         }
+        let fragment = gpu.shaders.compile(ENTRIES[1], &defines)?;
         let (draws, main) = match &key.material {
-            MaterialKey::Classes(routing) => {
-                if !gpu.device.supports_stencil_target() {
-                    return Err(Error::Unsupported(format!(
-                        "variant {variant}: a varying stack under mode=specialized routes its \
-                         pixels by an 8-bit stencil, which `{}` cannot attach; shade it \
-                         under mode=generic",
-                        gpu.device.report.name
-                    )));
-                }
-                let marker = gpu.shaders.compile(MARK_ENTRY, &defines)?;
-                let compare = routing.compare_mask();
-                let mut draws = Vec::new();
-                for (bit, &layer) in routing.marks.iter().enumerate() {
-                    let pipeline = build(
-                        &marker,
-                        Some(StencilUse::Mark),
-                        &key.mark_spec(layer),
-                        &format!("mark layer {} {variant}", layer + 1),
-                    )?;
-                    draws.push(Draw {
-                        pipeline,
-                        stencil: Some((1 << bit, 0, 1 << bit)),
-                    });
-                }
-                let main = draws.len();
-                for class in &routing.classes {
-                    let pipeline = build(
-                        &fragment,
-                        Some(StencilUse::Equal),
-                        &key.class_spec(class),
-                        &format!("forward {variant} class {:#04x}", class.bits),
-                    )?;
-                    draws.push(Draw {
-                        pipeline,
-                        stencil: Some((class.bits, compare, 0)),
-                    });
-                }
-                (draws, main)
-            }
+            MaterialKey::Classes(routing) => builder.routed(&key, routing, &fragment, &defines)?,
             _ => {
-                let pipeline = build(
-                    &fragment,
-                    None,
-                    &key.spec(shape),
-                    &format!("forward {variant}"),
-                )?;
+                let name = format!("forward {variant}");
+                let pipeline = builder.build(&fragment, None, &spec, &name)?;
                 (
                     vec![Draw {
                         pipeline,
@@ -250,5 +164,128 @@ impl ForwardPass {
         self.pipelines()
             .map(|p| p.creation.cache_hit)
             .try_fold(true, |all, hit| hit.map(|h| all && h))
+    }
+}
+
+/// What every pipeline of a pass shares: the device, the graphics layout, the vertex shader
+/// and the target's format.
+struct Builder<'a> {
+    gpu: &'a Gpu,
+    layout: &'a PipelineLayout,
+    vertex: std::sync::Arc<[u32]>,
+    color_format: Format,
+}
+
+impl Builder<'_> {
+    /// A graphics pipeline drawing the mesh with `fragment` into `formats`.
+    fn build_into(
+        &self,
+        fragment: &[u32],
+        formats: &[Format],
+        stencil: Option<StencilUse>,
+        spec: &ShadeSpec,
+        name: &str,
+    ) -> Result<Pipeline> {
+        let desc = GraphicsDesc {
+            vertex: &self.vertex,
+            fragment,
+            vertex_stride: std::mem::size_of::<Vertex>() as u32,
+            attributes: &[
+                (0, Format::R32G32B32_SFLOAT, 0),
+                (1, Format::R32G32B32_SFLOAT, 12),
+                (2, Format::R32G32_SFLOAT, 24),
+            ],
+            color_formats: formats,
+            cull_back: true,
+            stencil,
+        };
+        self.gpu.graphics_pipeline(self.layout, &desc, spec, name)
+    }
+
+    /// A graphics pipeline drawing the mesh with `fragment` into the target.
+    fn build(
+        &self,
+        fragment: &[u32],
+        stencil: Option<StencilUse>,
+        spec: &ShadeSpec,
+        name: &str,
+    ) -> Result<Pipeline> {
+        self.build_into(fragment, &[self.color_format], stencil, spec, name)
+    }
+
+    /// A routed pass's draws (`render::classes`): the stencil marks, then one pipeline per
+    /// class; and the index of the first class.
+    fn routed(
+        &self,
+        key: &PassKey,
+        routing: &Routing,
+        fragment: &[u32],
+        defines: &[(&'static str, &'static str)],
+    ) -> Result<(Vec<Draw>, usize)> {
+        let variant = key.variant;
+        if !self.gpu.device.supports_stencil_target() {
+            return Err(Error::Unsupported(format!(
+                "variant {variant}: a varying stack under mode=specialized routes its pixels \
+                 by an 8-bit stencil, which `{}` cannot attach; shade it under mode=generic",
+                self.gpu.device.report.name
+            )));
+        }
+        let marker = self.gpu.shaders.compile(MARK_ENTRY, defines)?;
+        let mut draws = Vec::new();
+        for (bit, &layer) in routing.marks.iter().enumerate() {
+            let name = format!("mark layer {} {variant}", layer + 1);
+            let pipeline = self.build(
+                &marker,
+                Some(StencilUse::Mark),
+                &key.mark_spec(layer),
+                &name,
+            )?;
+            draws.push(Draw {
+                pipeline,
+                stencil: Some((1 << bit, 0, 1 << bit)),
+            });
+        }
+        let main = draws.len();
+        for class in &routing.classes {
+            let name = format!("forward {variant} class {:#04x}", class.bits);
+            let spec = key.class_spec(class);
+            let pipeline = self.build(fragment, Some(StencilUse::Equal), &spec, &name)?;
+            draws.push(Draw {
+                pipeline,
+                stencil: Some((class.bits, routing.compare_mask(), 0)),
+            });
+        }
+        Ok((draws, main))
+    }
+
+    /// The deferred path's pipelines (`render::deferred`): the G-buffer's draw and the
+    /// shading kernel over the `shared` sets.
+    fn deferred(
+        &self,
+        key: &PassKey,
+        shared: [&DescriptorSetLayout; 2],
+        spec: ShadeSpec,
+        defines: &[(&'static str, &'static str)],
+    ) -> Result<DeferredPipelines> {
+        let variant = key.variant;
+        match key.material {
+            MaterialKey::Classes(_) => {
+                return Err(Error::Unsupported(format!(
+                    "variant {variant}: a varying stack under mode=specialized shades each \
+                     class of pixels with its own pipeline, which the deferred path does not \
+                     classify yet; shade it with path=forward, or under mode=generic"
+                )))
+            }
+            MaterialKey::Reference(_) => {
+                return Err(Error::Unsupported(
+                    "the reference image is drawn by the forward path only".into(),
+                ))
+            }
+            _ => {}
+        }
+        let fragment = self.gpu.shaders.compile(GBUFFER_ENTRY, defines)?;
+        let name = format!("g-buffer {variant}");
+        let gbuffer = self.build_into(&fragment, &[GBUFFER_FORMAT; 2], None, &spec, &name)?;
+        DeferredPipelines::new(self.gpu, gbuffer, shared, spec, defines, self.color_format)
     }
 }

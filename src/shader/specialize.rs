@@ -65,6 +65,46 @@ pub struct Spread {
 /// the pipeline: the GPU reads the maps in f32 and filters them, the host decides in f64.
 const MAPPED_MARGIN: f64 = 1e-6;
 
+/// The test `x > 0` over `[lo, hi]`: its one value there, or `None`.
+fn positive((lo, hi): (f64, f64)) -> Option<bool> {
+    match (lo > 0.0, hi <= 0.0) {
+        (true, _) => Some(true),
+        (_, true) => Some(false),
+        _ => None,
+    }
+}
+
+/// An interface's tests over the interval `[lo, hi]` of its relative η: index-matched, clear
+/// (reflects nothing), denser below; each a constant, or `None` where the interval reaches
+/// its threshold (within `margin`). An index-matched interface is neither of the others.
+fn interface_tests(
+    (lo, hi): (f64, f64),
+    margin: f64,
+) -> (Option<bool>, Option<bool>, Option<bool>) {
+    // |η − 1| < t over [lo, hi].
+    let near = |t: f64| {
+        let far = (lo - 1.0).abs().max((hi - 1.0).abs());
+        let nearest = if lo <= 1.0 && hi >= 1.0 {
+            0.0
+        } else {
+            (lo - 1.0).abs().min((hi - 1.0).abs())
+        };
+        if far < t - margin {
+            Some(true)
+        } else if nearest >= t + margin {
+            Some(false)
+        } else {
+            None
+        }
+    };
+    let matched = near(INDEX_MATCHED);
+    if matched == Some(true) {
+        return (matched, Some(false), Some(false));
+    }
+    let denser = below(lo, hi, 1.0, margin).map(|b| !b);
+    (matched, near(REFLECTS_NOTHING), denser)
+}
+
 /// A test `x < t` (or `x ≥ t` as its negation) over the interval `[lo, hi]`: its one value
 /// there, or `None` where the interval reaches the threshold (within `margin`).
 fn below(lo: f64, hi: f64, t: f64, margin: f64) -> Option<bool> {
@@ -136,15 +176,11 @@ impl Structure {
                 // (the baked table's diffuse row under mode=baked).
                 continue;
             }
-            let (r_lo, r_hi) = spread
+            // α = 0 exactly (a map's α is never negative).
+            let roughness = spread
                 .roughness
                 .unwrap_or((layer.roughness, layer.roughness));
-            // α = 0 exactly (a map's α is never negative).
-            let smooth = match (r_lo > 0.0, r_hi <= 0.0) {
-                (true, _) => Some(false),
-                (_, true) => Some(true),
-                _ => None,
-            };
+            let smooth = positive(roughness).map(|rough| !rough);
             if layer.is_conductor() {
                 if i + 1 != count {
                     return Err(SpecializeError::ConductorAbove { layer: i + 1 });
@@ -157,12 +193,7 @@ impl Structure {
                 continue;
             }
             let medium = if model == Model::Tm6 {
-                let (d_lo, d_hi) = spread.depth.unwrap_or((layer.depth, layer.depth));
-                match (d_lo > 0.0, d_hi <= 0.0) {
-                    (true, _) => Some(true),
-                    (_, true) => Some(false),
-                    _ => None,
-                }
+                positive(spread.depth.unwrap_or((layer.depth, layer.depth)))
             } else {
                 Some(false)
             };
@@ -173,32 +204,8 @@ impl Structure {
             } else {
                 0.0
             };
-            let (eta_lo, eta_hi) = (e_lo / above.1, e_hi / above.0);
-            // |η − 1| < t over [eta_lo, eta_hi].
-            let near = |t: f64| {
-                let far = (eta_lo - 1.0).abs().max((eta_hi - 1.0).abs());
-                let nearest = if eta_lo <= 1.0 && eta_hi >= 1.0 {
-                    0.0
-                } else {
-                    (eta_lo - 1.0).abs().min((eta_hi - 1.0).abs())
-                };
-                if far < t - margin {
-                    Some(true)
-                } else if nearest >= t + margin {
-                    Some(false)
-                } else {
-                    None
-                }
-            };
-            let matched = near(INDEX_MATCHED);
-            let (clear, denser) = if matched == Some(true) {
-                (Some(false), Some(false))
-            } else {
-                (
-                    near(REFLECTS_NOTHING),
-                    below(eta_lo, eta_hi, 1.0, margin).map(|b| !b),
-                )
-            };
+            let (matched, clear, denser) =
+                interface_tests((e_lo / above.1, e_hi / above.0), margin);
             s.settle(bit, [smooth, medium, matched, clear, denser]);
             match matched {
                 // No interface: the medium above stays.

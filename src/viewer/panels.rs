@@ -11,7 +11,7 @@ use crate::material::simplify::simplify;
 use crate::material::{presets, Stack};
 use crate::model::LayerParams;
 use crate::render::scene::Camera;
-use crate::variant::{Axis, Fgd, Ibl, Mode, Model, Ndf, Tir, VariantKey, G2};
+use crate::variant::{Axis, Fgd, Ibl, Mode, Model, Ndf, ShadePath, Tir, VariantKey, G2};
 
 use super::layer_edit::{
     coverage_editor, coverage_of, coverage_value, describe, layer_editor, rgb_row, CoverageEdit,
@@ -308,6 +308,8 @@ impl Panels {
         choose(ui, "mode", &mut v.mode, Mode::VALUES);
         // How the environment lights each lobe (matched and taps build a second cube once).
         choose(ui, "ibl", &mut v.ibl, Ibl::VALUES);
+        // Fragment shading, or a G-buffer then compute.
+        choose(ui, "path", &mut v.path, ShadePath::VALUES);
         if self.requested != before {
             self.stack.model = stack_model(self.requested.model, self.stack.model);
             self.message = None;

@@ -250,24 +250,11 @@ impl Pipeline {
         });
         let vertex_input = VertexInput::new(desc);
         let vertex_state = vertex_input.info();
-        let writes = if desc.stencil == Some(StencilUse::Mark) {
-            vk::ColorComponentFlags::empty()
-        } else {
-            vk::ColorComponentFlags::RGBA
-        };
-        let blend_attachments: Vec<_> = desc
-            .color_formats
-            .iter()
-            .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(writes))
-            .collect();
+        let blend_attachments = desc.blend_attachments();
         let blend =
             vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-        let states = if desc.stencil.is_some() {
-            &DYNAMIC_STATES_STENCIL[..]
-        } else {
-            &DYNAMIC_STATES[..]
-        };
-        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(states);
+        let dynamic =
+            vk::PipelineDynamicStateCreateInfo::default().dynamic_states(desc.dynamic_states());
         let mut rendering =
             vk::PipelineRenderingCreateInfo::default().color_attachment_formats(desc.color_formats);
         if desc.stencil.is_some() {
@@ -541,6 +528,32 @@ pub struct GraphicsDesc<'a> {
     /// What the pipeline does with a stencil attachment (`STENCIL_FORMAT`) of its rendering
     /// scope; `None`: the scope has none.
     pub stencil: Option<StencilUse>,
+}
+
+impl GraphicsDesc<'_> {
+    /// One blend state per colour attachment: written, unblended (a stencil mark writes no
+    /// colour).
+    fn blend_attachments(&self) -> Vec<vk::PipelineColorBlendAttachmentState> {
+        let writes = if self.stencil == Some(StencilUse::Mark) {
+            vk::ColorComponentFlags::empty()
+        } else {
+            vk::ColorComponentFlags::RGBA
+        };
+        self.color_formats
+            .iter()
+            .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(writes))
+            .collect()
+    }
+
+    /// The dynamic states: the viewport and scissor, and with a stencil its reference and
+    /// masks.
+    fn dynamic_states(&self) -> &'static [vk::DynamicState] {
+        if self.stencil.is_some() {
+            &DYNAMIC_STATES_STENCIL
+        } else {
+            &DYNAMIC_STATES
+        }
+    }
 }
 
 /// A graphics pipeline's part in routing pixels by the stencil: the reference value and the
