@@ -201,10 +201,50 @@ fn dilution(r: &Results) -> Option<String> {
 /// what divergence costs — and against the line at its busiest pixel's count, which a SIMD
 /// group holding that pixel runs whatever its other lanes need. Empty without at least two
 /// coherent counts and one varying run.
-fn divergence(r: &Results) -> Vec<String> {
+pub(super) fn divergence(r: &Results) -> Vec<String> {
+    // Each variant (the forward and the deferred path) against its own coherent runs.
+    let mut variants: Vec<VariantKey> = Vec::new();
+    for run in r.runs.iter().filter(|run| !run.is_baseline()) {
+        if run.active_layers.is_some() && !variants.contains(&run.variant) {
+            variants.push(run.variant);
+        }
+    }
+    let several = variants.len() > 1;
+    let mut lines: Vec<String> = variants
+        .into_iter()
+        .flat_map(|v| divergence_of(r, v, several))
+        .collect();
+    if lines.is_empty() {
+        return lines;
+    }
+    if let Some(lanes) = r.device.subgroup_size {
+        let simd = if is_llvmpipe(r) {
+            format!(
+                "lavapipe runs {lanes} pixels in lockstep (its subgroup size: one SIMD vector \
+                 of 32-bit lanes, part of the 4x4 pixel block it rasterises, or of a compute \
+                 kernel's work group)"
+            )
+        } else {
+            format!(
+                "{} runs {lanes} lanes in lockstep (its subgroup size)",
+                r.device.name
+            )
+        };
+        lines.push(format!(
+            "{simd}: a group in which any pixel runs more layers runs them for all its pixels, \
+             so a mask coherent over groups of that size costs what its mean costs, and a finer \
+             one what its busiest pixels cost."
+        ));
+    }
+    lines
+}
+
+/// [`divergence`] for the runs of `variant` (named in each line when `named`).
+fn divergence_of(r: &Results, variant: VariantKey, named: bool) -> Vec<String> {
     let runs: Vec<(&Run, ActiveLayers)> = r
         .runs
         .iter()
+        .filter(|run| run.variant == variant)
         .filter_map(|run| Some((run, run.active_layers?)))
         .collect();
     let mut coherent: Vec<(f64, &Run)> = runs
@@ -260,33 +300,19 @@ fn divergence(r: &Results) -> Vec<String> {
         if parts.is_empty() {
             continue;
         }
+        let name = if named {
+            format!("{} ({})", run.material, run.variant.short())
+        } else {
+            run.material.clone()
+        };
         lines.push(format!(
-            "{}: {} to {} layers per pixel, {:.2} on average; against coherent shading of \
+            "{name}: {} to {} layers per pixel, {:.2} on average; against coherent shading of \
              {:.2} layers (interpolated between the runs whose pixels all run one count): {}.",
-            run.material,
             a.min,
             a.max,
             a.mean,
             a.mean,
             parts.join("; ")
-        ));
-    }
-    if let Some(lanes) = r.device.subgroup_size {
-        let simd = if is_llvmpipe(r) {
-            format!(
-                "lavapipe runs {lanes} pixels in lockstep (its subgroup size: one SIMD vector \
-                 of 32-bit lanes, part of the 4x4 pixel block it rasterises)"
-            )
-        } else {
-            format!(
-                "{} runs {lanes} lanes in lockstep (its subgroup size)",
-                r.device.name
-            )
-        };
-        lines.push(format!(
-            "{simd}: a group in which any pixel runs more layers runs them for all its pixels, \
-             so a mask coherent over groups of that size costs what its mean costs, and a finer \
-             one what its busiest pixels cost."
         ));
     }
     lines

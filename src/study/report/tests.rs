@@ -553,3 +553,63 @@ fn a_study_on_two_devices_gets_a_table_of_both_ratios() {
     let alone = render(&[on("lavapipe", 2.5)], Path::new("R.md"));
     assert!(!alone.contains("## Across devices"), "one device: no table");
 }
+
+/// The divergence reading takes each path against its own coherent runs (never the ggx
+/// baseline's), and names the variant when a study has several.
+#[test]
+fn divergence_is_read_per_variant_against_its_own_coherent_runs() {
+    use super::reading::divergence;
+    use crate::profile::results::ActiveLayers;
+    let with =
+        |variant: &str, material: &str, per_pixel: f64, (min, mean, max): (u32, f64, u32)| Run {
+            material: material.into(),
+            instructions_per_pixel: Some(per_pixel),
+            active_layers: Some(ActiveLayers { min, mean, max }),
+            ..run(variant, 1.0, 1, 1)
+        };
+    let (forward, deferred) = (
+        "model=tm2,max_layers=5",
+        "model=tm2,max_layers=5,path=deferred",
+    );
+    let results = Results {
+        device: DeviceInfo {
+            name: "llvmpipe".into(),
+            driver: "llvmpipe Mesa".into(),
+            api_version: "1.3".into(),
+            vendor_id: 0x10005,
+            subgroup_size: None,
+        },
+        git_rev: "0".into(),
+        command: "c".into(),
+        size: [8, 8],
+        lp_num_threads: Some("0".into()),
+        scene: crate::render::scene::Scene::FullScreen,
+        counter: None,
+        lighting: None,
+        environment: None,
+        calibration: None,
+        runs: vec![
+            with("model=ggx", "low", 100.0, (1, 1.0, 1)),
+            with(forward, "low", 1000.0, (1, 1.0, 1)),
+            with(forward, "high", 5000.0, (5, 5.0, 5)),
+            with(forward, "noise", 4000.0, (1, 3.0, 5)),
+            with(deferred, "low", 1200.0, (1, 1.0, 1)),
+            with(deferred, "high", 5400.0, (5, 5.0, 5)),
+            with(deferred, "noise", 3300.0, (1, 3.0, 5)),
+        ],
+    };
+    let lines = divergence(&results);
+    assert_eq!(lines.len(), 2, "{lines:?}");
+    assert!(
+        lines[0].starts_with("noise (model=tm2,max_layers=5):")
+            && lines[0].contains("JIT instructions per pixel +33 % (50 % of the way"),
+        "{}",
+        lines[0]
+    );
+    assert!(
+        lines[1].starts_with("noise (model=tm2,max_layers=5,path=deferred):")
+            && lines[1].contains("JIT instructions per pixel +0 % (0 % of the way"),
+        "{}",
+        lines[1]
+    );
+}
