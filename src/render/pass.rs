@@ -177,19 +177,16 @@ impl PassKey {
         spec
     }
 
-    /// Errs unless a routed key's classes are those of `layers` varying by `surface`'s maps
-    /// (nothing to check for the other keys).
-    pub fn routes(&self, layers: &[LayerParams], surface: &Surface) -> Result<()> {
-        let MaterialKey::Classes(own) = &self.material else {
-            return Ok(());
-        };
-        match Routing::plan(self.variant.model, layers, &surface.maps) {
-            Ok(routing) if routing == *own => Ok(()),
-            _ => Err(Error::Unsupported(format!(
+    /// Errs unless a routed key's classes are `planned` (`Routing::plan` of the stack and
+    /// the maps a frame renders; nothing to check for the other keys).
+    pub fn routes(&self, planned: &Routing) -> Result<()> {
+        match &self.material {
+            MaterialKey::Classes(own) if own != planned => Err(Error::Unsupported(format!(
                 "this pass ({}) was built for a varying stack whose pixels fall into other \
                  classes; prepare one for this stack",
                 self.variant
             ))),
+            _ => Ok(()),
         }
     }
 

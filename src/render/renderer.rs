@@ -28,11 +28,12 @@ use crate::vk::{
 };
 
 use super::baked::{self, BakedTable, BakedTexture};
+use super::classes::Routing;
 use super::deferred::{DeferredPipelines, DeferredPush, GBUFFER_FORMAT};
 use super::forward::ForwardPass;
 use super::inputs::ShadingInputs;
 use super::lights::{lights_block, Lighting};
-use super::pass::PassKey;
+use super::pass::{MaterialKey, PassKey};
 use super::scene::{uv_sphere, Camera, Mesh};
 use super::sky::SkyPass;
 use super::surface::SurfaceTexture;
@@ -105,7 +106,13 @@ pub struct Renderer<'g> {
     /// The energy ratios of the stacks rendered under `transport=corrected` so far, by
     /// variant and stack (the last few: building them walks the stack's transport).
     corrections: RefCell<Vec<(VariantKey, Vec<LayerParams>, Correction)>>,
+    /// The routing last planned for a surface (its index in `surfaces`), model and stack:
+    /// planning walks every texel of the coverage maps, which a frame should not repeat.
+    routing: RefCell<Option<PlannedRouting>>,
 }
+
+/// A routing as planned: the surface's index, the model, the stack, and the routing.
+type PlannedRouting = (usize, Model, Vec<LayerParams>, Routing);
 
 /// Stacks whose `transport=corrected` ratios a renderer keeps.
 const KEPT_CORRECTIONS: usize = 8;
@@ -176,6 +183,7 @@ impl<'g> Renderer<'g> {
             surfaces: Vec::new(),
             current_surface: None,
             corrections: RefCell::new(Vec::new()),
+            routing: RefCell::new(None),
         })
     }
 
@@ -575,8 +583,10 @@ impl<'g> Renderer<'g> {
     /// the renderer's lighting: each of them compiled into the pass (its [`PassKey`]).
     fn check_pass(&self, pass: &ForwardPass, layers: &[LayerParams]) -> Result<()> {
         pass.key.admits(layers)?;
-        if let Some(s) = self.surface_texture() {
-            pass.key.routes(layers, &s.surface)?;
+        if let (Some(surface), MaterialKey::Classes(_)) = (self.current_surface, &pass.key.material)
+        {
+            pass.key
+                .routes(&self.routing(surface, pass.key.variant.model, layers)?)?;
         }
         let key = &pass.key;
         match (self.surface_texture(), key.surface != 0) {
@@ -618,6 +628,22 @@ impl<'g> Renderer<'g> {
             )));
         }
         Ok(())
+    }
+
+    /// The routing of `layers` in `model` over surface `surface`'s maps
+    /// (`render::classes`), planned once per surface, model and stack.
+    fn routing(&self, surface: usize, model: Model, layers: &[LayerParams]) -> Result<Routing> {
+        let mut kept = self.routing.borrow_mut();
+        if let Some((s, m, l, routing)) = kept.as_ref() {
+            if *s == surface && *m == model && l == layers {
+                return Ok(routing.clone());
+            }
+        }
+        let maps = &self.surfaces[surface].surface.maps;
+        let routing = Routing::plan(model, layers, maps)
+            .map_err(|e| Error::Unsupported(format!("routing the stack's pixels: {e}")))?;
+        *kept = Some((surface, model, layers.to_vec(), routing.clone()));
+        Ok(routing)
     }
 
     /// The energy ratios of `layers` under `variant` when its transport is `corrected`, from
