@@ -10,7 +10,7 @@ use crate::pipeline_cache::{self, PersistentCache};
 use crate::shader::kernel::{KernelInterface, WorkGroupSpec};
 use crate::shader::ShaderCompiler;
 use crate::vk::{
-    DescriptorSet, DescriptorSetLayout, Device, DeviceSelector, GraphicsDesc, InstanceDesc,
+    Buffer, DescriptorSet, DescriptorSetLayout, Device, DeviceSelector, GraphicsDesc, InstanceDesc,
     Pipeline, PipelineCreation, PipelineLayout, Recorder, SpecConstants, Stages,
 };
 
@@ -153,6 +153,27 @@ impl ComputeKernel {
         push: &P,
         invocations: [u32; 3],
     ) {
+        self.bind(rec, sets, push);
+        let [x, y, z] = self.interface.groups(invocations);
+        rec.dispatch(x, y, z);
+    }
+
+    /// Records one dispatch whose work-group counts the GPU reads from `args` at byte
+    /// `offset` (written by an earlier dispatch), with `sets` and `push` bound as
+    /// [`ComputeKernel::record_dispatch`] binds them.
+    pub fn record_dispatch_indirect<P: bytemuck::Pod>(
+        &self,
+        rec: &mut Recorder,
+        sets: &[&DescriptorSet],
+        push: &P,
+        args: &Buffer,
+        offset: u64,
+    ) {
+        self.bind(rec, sets, push);
+        rec.dispatch_indirect(args, offset);
+    }
+
+    fn bind<P: bytemuck::Pod>(&self, rec: &mut Recorder, sets: &[&DescriptorSet], push: &P) {
         debug_assert_eq!(std::mem::size_of::<P>() as u32, self.interface.push.size);
         rec.bind_pipeline(&self.pipeline);
         for (index, set) in sets.iter().enumerate() {
@@ -161,7 +182,5 @@ impl ComputeKernel {
         if std::mem::size_of::<P>() > 0 {
             rec.push_constants(&self.layout, push);
         }
-        let [x, y, z] = self.interface.groups(invocations);
-        rec.dispatch(x, y, z);
     }
 }

@@ -242,6 +242,25 @@ axis!(
     }
 );
 
+axis!(
+    /// How the deferred path sends pixels to its shading pipelines (issue 28;
+    /// `render::deferred`). Under `mode=specialized` a varying stack's pixels fall into
+    /// classes by the layers their coverage leaves (`render::classes`), each with its own
+    /// pipeline.
+    Classify, "classify", {
+        /// One dispatch over every pixel; a varying stack's classes are not told apart, so
+        /// `mode=specialized` refuses one.
+        None = "none",
+        /// Each 8×8 tile (one work group) goes to the pipeline of its pixels' class where
+        /// they share one, else to the generic pipeline fitted to the stack: one indirect
+        /// dispatch per class.
+        Tiles = "tiles",
+        /// Each class's pixels are compacted into a list and its pipeline shades exactly
+        /// them: one indirect dispatch per class.
+        Pixels = "pixels",
+    }
+);
+
 /// The directions `ibl=taps` reads per lobe.
 pub const IBL_TAP_COUNT: u32 = 32;
 
@@ -271,6 +290,8 @@ pub struct VariantKey {
     pub ibl: Ibl,
     /// Where the stack is shaded: the mesh's fragment shader, or compute over a G-buffer.
     pub path: ShadePath,
+    /// How the deferred path sends pixels to its pipelines (`none` on the forward path).
+    pub classify: Classify,
 }
 
 impl Default for VariantKey {
@@ -288,6 +309,7 @@ impl Default for VariantKey {
             interfaces: Interfaces::Single,
             ibl: Ibl::SplitSum,
             path: ShadePath::Forward,
+            classify: Classify::None,
         }
     }
 }
@@ -305,6 +327,7 @@ pub const AXES: &[&str] = &[
     "interfaces",
     "ibl",
     "path",
+    "classify",
 ];
 
 /// Layers whose numeric values a `specialized-values` pipeline holds as constants, and the
@@ -515,6 +538,9 @@ impl fmt::Display for VariantKey {
         if self.path != ShadePath::Forward {
             write!(f, ",path={}", self.path)?;
         }
+        if self.classify != Classify::None {
+            write!(f, ",classify={}", self.classify)?;
+        }
         Ok(())
     }
 }
@@ -612,6 +638,7 @@ impl VariantKey {
                 "interfaces" => key.interfaces = Interfaces::parse_value(value)?,
                 "ibl" => key.ibl = Ibl::parse_value(value)?,
                 "path" => key.path = ShadePath::parse_value(value)?,
+                "classify" => key.classify = Classify::parse_value(value)?,
                 _ => {
                     return Err(VariantError::UnknownAxis {
                         key: axis.into(),
@@ -620,6 +647,15 @@ impl VariantKey {
                 }
             }
             seen.push(AXES.iter().find(|a| **a == axis).expect("matched above"));
+        }
+        if key.classify != Classify::None && key.path != ShadePath::Deferred {
+            return Err(VariantError::BadValue {
+                key: "classify".into(),
+                value: key.classify.to_string(),
+                allowed: "none on the forward path; tiles and pixels classify the \
+                          deferred path's pixels (add path=deferred)"
+                    .into(),
+            });
         }
         Ok(key)
     }
@@ -665,6 +701,25 @@ mod tests {
     }
 
     #[test]
+    fn classify_needs_the_deferred_path() {
+        let key: VariantKey = "model=tm2,classify=pixels,path=deferred".parse().unwrap();
+        assert!(
+            key.to_string().ends_with(",path=deferred,classify=pixels"),
+            "{key}"
+        );
+        let e = "model=tm2,classify=tiles"
+            .parse::<VariantKey>()
+            .unwrap_err();
+        assert!(e.to_string().contains("add path=deferred"), "{e}");
+        let e = "path=deferred,classify=cells"
+            .parse::<VariantKey>()
+            .unwrap_err();
+        assert!(e.to_string().contains("none, tiles, pixels"), "{e}");
+        let none: VariantKey = "path=deferred,classify=none".parse().unwrap();
+        assert!(none.to_string().ends_with(",path=deferred"), "{none}");
+    }
+
+    #[test]
     fn every_value_of_every_axis_round_trips() {
         let mut keys = Vec::new();
         for &(_, model) in Model::VALUES {
@@ -696,6 +751,11 @@ mod tests {
                                                 path: ShadePath::VALUES
                                                     [keys.len() % ShadePath::VALUES.len()]
                                                 .1,
+                                                classify: if keys.len() % 2 == 1 {
+                                                    Classify::VALUES[keys.len() / 2 % 3].1
+                                                } else {
+                                                    Classify::None
+                                                },
                                             });
                                         }
                                     }

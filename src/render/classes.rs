@@ -52,6 +52,9 @@ pub struct Routing {
     pub marks: Vec<usize>,
     /// Every class that occurs, the most layers first.
     pub classes: Vec<Class>,
+    /// The stack's layers, whatever its coverage leaves (a pipeline that shades every class,
+    /// the generic one, holds them all).
+    pub layer_count: usize,
 }
 
 impl Routing {
@@ -112,6 +115,7 @@ impl Routing {
         Ok(Self {
             marks: groups.into_iter().map(|g| g.layer).collect(),
             classes,
+            layer_count: layers.len(),
         })
     }
 

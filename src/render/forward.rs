@@ -7,12 +7,12 @@
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::shader::specialize::BakedShape;
-use crate::variant::{ShadePath, ShadeSpec};
+use crate::variant::{Classify, ShadePath, ShadeSpec};
 use crate::vk::{DescriptorSetLayout, Format, GraphicsDesc, Pipeline, PipelineLayout, StencilUse};
 
 use super::baked::{BakedTable, BakedTexture};
 use super::classes::Routing;
-use super::deferred::{DeferredPipelines, GBUFFER_ENTRY, GBUFFER_FORMAT, KERNEL};
+use super::deferred::{DeferredPipelines, BINS_KERNEL, GBUFFER_ENTRY, GBUFFER_FORMAT, KERNEL};
 use super::pass::{MaterialKey, PassKey};
 use super::scene::Vertex;
 
@@ -93,7 +93,11 @@ impl ForwardPass {
         let spec = key.spec(shape);
         if variant.path == ShadePath::Deferred {
             let deferred = builder.deferred(&key, shared, spec, &defines)?;
-            let spirv_bytes = gpu.shaders.compile(KERNEL.entry, &defines)?.len() * 4;
+            let entry = match variant.classify {
+                Classify::None => KERNEL.entry,
+                Classify::Tiles | Classify::Pixels => BINS_KERNEL.entry,
+            };
+            let spirv_bytes = gpu.shaders.compile(entry, &defines)?.len() * 4;
             return Ok(Self {
                 key,
                 draws: Vec::new(),
@@ -132,17 +136,14 @@ impl ForwardPass {
     /// layers.
     pub fn pipeline(&self) -> &Pipeline {
         match &self.deferred {
-            Some(d) => &d.kernel.pipeline,
+            Some(d) => d.main_pipeline(),
             None => &self.draws[self.main].pipeline,
         }
     }
 
     /// Every pipeline the pass made.
     fn pipelines(&self) -> impl Iterator<Item = &Pipeline> {
-        let deferred = self
-            .deferred
-            .iter()
-            .flat_map(|d| [&d.gbuffer, &d.kernel.pipeline]);
+        let deferred = self.deferred.iter().flat_map(|d| d.pipelines());
         self.draws.iter().map(|d| &d.pipeline).chain(deferred)
     }
 
@@ -268,12 +269,15 @@ impl Builder<'_> {
         defines: &[(&'static str, &'static str)],
     ) -> Result<DeferredPipelines> {
         let variant = key.variant;
-        match key.material {
-            MaterialKey::Classes(_) => {
+        match &key.material {
+            MaterialKey::Classes(routing)
+                if variant.classify == Classify::None && routing.classes.len() > 1 =>
+            {
                 return Err(Error::Unsupported(format!(
                     "variant {variant}: a varying stack under mode=specialized shades each \
-                     class of pixels with its own pipeline, which the deferred path does not \
-                     classify yet; shade it with path=forward, or under mode=generic"
+                     class of pixels with its own pipeline, which classify=none does not \
+                     tell apart; classify them (classify=pixels or classify=tiles), or shade \
+                     it with path=forward, or under mode=generic"
                 )))
             }
             MaterialKey::Reference(_) => {
@@ -286,6 +290,14 @@ impl Builder<'_> {
         let fragment = self.gpu.shaders.compile(GBUFFER_ENTRY, defines)?;
         let name = format!("g-buffer {variant}");
         let gbuffer = self.build_into(&fragment, &[GBUFFER_FORMAT; 2], None, &spec, &name)?;
-        DeferredPipelines::new(self.gpu, gbuffer, shared, spec, defines, self.color_format)
+        DeferredPipelines::new(
+            self.gpu,
+            gbuffer,
+            shared,
+            key,
+            spec,
+            defines,
+            self.color_format,
+        )
     }
 }

@@ -29,7 +29,7 @@ use crate::vk::{
 
 use super::baked::{self, BakedTable, BakedTexture};
 use super::classes::Routing;
-use super::deferred::{DeferredPipelines, DeferredPush, GBUFFER_FORMAT};
+use super::deferred::{DeferredFrame, DeferredPipelines};
 use super::forward::ForwardPass;
 use super::inputs::ShadingInputs;
 use super::lights::{lights_block, Lighting};
@@ -363,7 +363,7 @@ impl<'g> Renderer<'g> {
         self.draw_sky(&sets, &target, &target_view, &mut profiler)?;
 
         if let Some(deferred) = &pass.deferred {
-            let gbuffer = GBuffer::new(
+            let gbuffer = DeferredFrame::new(
                 self.gpu,
                 deferred,
                 &target_view,
@@ -376,7 +376,7 @@ impl<'g> Renderer<'g> {
                 let scope = profiler
                     .begin(rec, "shaded")
                     .expect("the sky scope is closed");
-                self.record_deferred(rec, deferred, &sets, &gbuffer, &target, width, height);
+                self.record_deferred(rec, deferred, &sets, &gbuffer, &target, [width, height]);
                 profiler.end(rec, scope);
                 Ok(())
             })?;
@@ -460,21 +460,18 @@ impl<'g> Renderer<'g> {
         Ok(())
     }
 
-    /// Records the deferred path: the mesh into the G-buffer, then the shading kernel over
-    /// every pixel into `target` (which the sky left as a colour attachment, and which is
-    /// left as one).
-    #[allow(clippy::too_many_arguments)]
+    /// Records the deferred path: the mesh into the G-buffer, then its shading into `target`
+    /// (which the sky left as a colour attachment, and which is left as one).
     fn record_deferred(
         &self,
         rec: &mut Recorder<'_>,
         deferred: &DeferredPipelines,
         sets: &FrameSets,
-        gbuffer: &GBuffer,
+        frame: &DeferredFrame,
         target: &Image,
-        width: u32,
-        height: u32,
+        [width, height]: [u32; 2],
     ) {
-        for image in &gbuffer.images {
+        for image in &frame.images {
             rec.transition(
                 image,
                 0..1,
@@ -482,12 +479,7 @@ impl<'g> Renderer<'g> {
                 ImageState::ColorAttachment,
             );
         }
-        rec.begin_rendering_targets(
-            &[&gbuffer.views[0], &gbuffer.views[1]],
-            width,
-            height,
-            [0.0; 4],
-        );
+        rec.begin_rendering_targets(&[&frame.views[0], &frame.views[1]], width, height, [0.0; 4]);
         rec.bind_pipeline(&deferred.gbuffer);
         rec.bind_set(&deferred.gbuffer, &self.layout, SHADING_SET, &sets.shading);
         rec.bind_set(&deferred.gbuffer, &self.layout, SCENE_SET, &sets.scene);
@@ -495,7 +487,7 @@ impl<'g> Renderer<'g> {
         rec.bind_index_buffer_u32(&self.indices);
         rec.draw_indexed(self.index_count);
         rec.end_rendering();
-        for image in &gbuffer.images {
+        for image in &frame.images {
             rec.transition(
                 image,
                 0..1,
@@ -503,24 +495,8 @@ impl<'g> Renderer<'g> {
                 ImageState::ComputeRead,
             );
         }
-        rec.transition(
-            target,
-            0..1,
-            ImageState::ColorAttachment,
-            ImageState::ComputeWrite,
-        );
-        deferred.kernel.record_dispatch(
-            rec,
-            &[&sets.shading, &sets.scene, &gbuffer.set],
-            &DeferredPush { width, height },
-            [width, height, 1],
-        );
-        rec.transition(
-            target,
-            0..1,
-            ImageState::ComputeWrite,
-            ImageState::ColorAttachment,
-        );
+        let shared = [&sets.shading, &sets.scene];
+        frame.record_shading(rec, deferred, shared, target, [width, height]);
     }
 
     /// Records and submits the sky into `target` (cleared first), timed in `profiler`'s
@@ -757,40 +733,4 @@ struct FrameSets {
     shading: DescriptorSet,
     scene: DescriptorSet,
     _buffers: [Buffer; 3],
-}
-
-/// A deferred frame's G-buffer: its two attachments and the kernel's own set over them and
-/// the render target.
-struct GBuffer {
-    images: [Image; 2],
-    views: [ImageView; 2],
-    set: DescriptorSet,
-}
-
-impl GBuffer {
-    fn new(
-        gpu: &Gpu,
-        deferred: &DeferredPipelines,
-        target_view: &ImageView,
-        sampler: &Sampler,
-        width: u32,
-        height: u32,
-    ) -> Result<Self> {
-        let device = &gpu.device;
-        let desc = ImageDesc::new_2d(GBUFFER_FORMAT, width, height)
-            .usage(ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::SAMPLED);
-        let images = [
-            Image::new(device, desc, "g-buffer position")?,
-            Image::new(device, desc, "g-buffer normal")?,
-        ];
-        let views = [
-            images[0].view("g-buffer position")?,
-            images[1].view("g-buffer normal")?,
-        ];
-        let mut set = DescriptorSet::new(device, &deferred.kernel.set_layout, "g-buffer")?;
-        set.write(0, Resource::Sampled(&views[0], sampler))
-            .write(1, Resource::Sampled(&views[1], sampler))
-            .write(2, Resource::Storage(target_view));
-        Ok(Self { images, views, set })
-    }
 }

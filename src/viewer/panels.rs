@@ -11,7 +11,7 @@ use crate::material::simplify::simplify;
 use crate::material::{presets, Stack};
 use crate::model::LayerParams;
 use crate::render::scene::Camera;
-use crate::variant::{Axis, Fgd, Ibl, Mode, Model, Ndf, ShadePath, Tir, VariantKey, G2};
+use crate::variant::{Axis, Classify, Fgd, Ibl, Mode, Model, Ndf, ShadePath, Tir, VariantKey, G2};
 
 use super::layer_edit::{
     coverage_editor, coverage_of, coverage_value, describe, layer_editor, rgb_row, CoverageEdit,
@@ -310,6 +310,12 @@ impl Panels {
         choose(ui, "ibl", &mut v.ibl, Ibl::VALUES);
         // Fragment shading, or a G-buffer then compute.
         choose(ui, "path", &mut v.path, ShadePath::VALUES);
+        // The deferred path's pixels to their pipelines: all at once, by tile, or by pixel.
+        if v.path == ShadePath::Deferred {
+            choose(ui, "classify", &mut v.classify, Classify::VALUES);
+        } else {
+            v.classify = Classify::None;
+        }
         if self.requested != before {
             self.stack.model = stack_model(self.requested.model, self.stack.model);
             self.message = None;

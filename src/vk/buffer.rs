@@ -31,6 +31,15 @@ impl BufferDesc {
         }
     }
 
+    /// Device-local storage buffer that also holds indirect dispatch arguments.
+    pub fn indirect(size: u64) -> Self {
+        let storage = Self::storage(size);
+        Self {
+            usage: storage.usage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+            ..storage
+        }
+    }
+
     /// Host-visible buffer the CPU writes and the GPU reads (uniforms, vertices, uploads).
     pub fn upload(size: u64, usage: vk::BufferUsageFlags) -> Self {
         Self {

@@ -78,6 +78,10 @@ impl ImageState {
 pub enum Access {
     ComputeWrite,
     ComputeRead,
+    /// Storage reads and writes (atomics) by compute shaders.
+    ComputeReadWrite,
+    /// Read as the arguments of an indirect dispatch or draw.
+    IndirectRead,
     TransferWrite,
     TransferRead,
     HostRead,
@@ -90,6 +94,11 @@ impl Access {
         match self {
             Self::ComputeWrite => (S::COMPUTE_SHADER, A::SHADER_STORAGE_WRITE),
             Self::ComputeRead => (S::COMPUTE_SHADER, A::SHADER_STORAGE_READ),
+            Self::ComputeReadWrite => (
+                S::COMPUTE_SHADER,
+                A::SHADER_STORAGE_READ | A::SHADER_STORAGE_WRITE,
+            ),
+            Self::IndirectRead => (S::DRAW_INDIRECT, A::INDIRECT_COMMAND_READ),
             Self::TransferWrite => (S::ALL_TRANSFER, A::TRANSFER_WRITE),
             Self::TransferRead => (S::ALL_TRANSFER, A::TRANSFER_READ),
             Self::HostRead => (S::HOST, A::HOST_READ),
@@ -212,6 +221,45 @@ impl Recorder<'_> {
     pub fn dispatch(&mut self, x: u32, y: u32, z: u32) {
         // SAFETY: recording state with a compute pipeline bound.
         unsafe { self.device.raw.cmd_dispatch(self.raw, x, y, z) };
+    }
+
+    /// A dispatch whose work-group counts (three u32) the GPU reads from `buffer` at byte
+    /// `offset` when it runs. Panics unless the buffer was made for indirect arguments and
+    /// holds them there.
+    pub fn dispatch_indirect(&mut self, buffer: &Buffer, offset: u64) {
+        assert!(
+            buffer
+                .desc
+                .usage
+                .contains(vk::BufferUsageFlags::INDIRECT_BUFFER),
+            "dispatch_indirect: the buffer was not made for indirect arguments"
+        );
+        assert!(offset.is_multiple_of(4) && offset + 12 <= buffer.size());
+        // SAFETY: recording state with a compute pipeline bound; the buffer is alive (the
+        // caller holds it until the submission completes), has INDIRECT_BUFFER usage and
+        // holds 12 bytes at the 4-aligned `offset` (asserted above).
+        unsafe {
+            self.device
+                .raw
+                .cmd_dispatch_indirect(self.raw, buffer.raw, offset)
+        };
+    }
+
+    /// Fills the first `bytes` of `buffer` (a multiple of 4) with the u32 `value`: a
+    /// transfer write.
+    pub fn fill_buffer(&mut self, buffer: &Buffer, bytes: u64, value: u32) {
+        assert!(bytes.is_multiple_of(4) && bytes <= buffer.size());
+        assert!(buffer
+            .desc
+            .usage
+            .contains(vk::BufferUsageFlags::TRANSFER_DST));
+        // SAFETY: recording state outside a rendering scope; the buffer is alive, a transfer
+        // target, and `bytes` (4-aligned) lies within it (asserted above).
+        unsafe {
+            self.device
+                .raw
+                .cmd_fill_buffer(self.raw, buffer.raw, 0, bytes, value)
+        };
     }
 
     /// Begins dynamic rendering into `target` (in `ColorAttachment` state), clearing it.

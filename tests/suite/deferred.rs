@@ -11,7 +11,7 @@ use lamina::render::lights::Lighting;
 use lamina::render::scene::{full_screen, uv_sphere, Camera};
 use lamina::render::{PassKey, Renderer, TargetFormat};
 use lamina::tables::environment::EnvDesc;
-use lamina::variant::{Mode, ShadePath, VariantKey};
+use lamina::variant::{Classify, Mode, ShadePath, VariantKey};
 use lamina::vk::{DeviceSelector, InstanceDesc};
 
 const W: u32 = 48;
@@ -37,10 +37,20 @@ fn renderer(gpu: &Gpu) -> Renderer<'_> {
     renderer
 }
 
-/// `stack` under `variant` on both paths: the largest relative difference per pixel.
-fn both_paths(renderer: &mut Renderer<'_>, variant: VariantKey, stack: &Stack) -> f64 {
-    let mut image = |path: ShadePath| {
-        let variant = VariantKey { path, ..variant };
+/// `stack` under `variant` on the forward path and on the deferred path under each of
+/// `classify`: the largest relative difference per pixel.
+fn both_paths(
+    renderer: &mut Renderer<'_>,
+    variant: VariantKey,
+    stack: &Stack,
+    classify: &[Classify],
+) -> f64 {
+    let mut image = |path: ShadePath, classify: Classify| {
+        let variant = VariantKey {
+            path,
+            classify,
+            ..variant
+        };
         let key = PassKey::new(
             variant,
             &stack.layers,
@@ -52,15 +62,21 @@ fn both_paths(renderer: &mut Renderer<'_>, variant: VariantKey, stack: &Stack) -
         renderer.set_surface(stack.surface.as_ref()).unwrap();
         renderer.render(&pass, &stack.layers, W, H).unwrap().pixels
     };
-    let forward = image(ShadePath::Forward);
-    let deferred = image(ShadePath::Deferred);
+    let forward = image(ShadePath::Forward, Classify::None);
     assert!(common::mean_radiance(&forward) > 0.0);
-    common::largest_relative(&forward, &deferred, 1e-3)
+    classify
+        .iter()
+        .map(|&c| {
+            let deferred = image(ShadePath::Deferred, c);
+            common::largest_relative(&forward, &deferred, 1e-3)
+        })
+        .fold(0.0, f64::max)
 }
 
-/// Every preset under every mode it takes (the varying ones under generic), and the
-/// divergence study's masked stacks, over the full-screen grid; then the sphere, whose
-/// uncovered pixels must keep the sky.
+/// Every preset under every mode it takes, and the divergence study's masked stacks, over
+/// the full-screen grid, each classified by tiles and by pixels under `mode=specialized` (a
+/// varying stack's classes each with its own pipeline, its mixed tiles with the generic one);
+/// then the sphere, whose uncovered pixels and tiles must keep the sky.
 #[test]
 fn the_deferred_path_renders_what_the_forward_path_does() {
     let gpu = sync_validated();
@@ -73,42 +89,54 @@ fn the_deferred_path_renders_what_the_forward_path_does() {
         let path = common::repo_path(&format!("profiling/sweeps/divergence/{mask}.toml"));
         stacks.push(Stack::load(&path).unwrap());
     }
-    let mut cases = 0;
+    let (mut cases, mut routed) = (0, 0);
+    let every = [Classify::None, Classify::Tiles, Classify::Pixels];
+    let sorted = [Classify::Tiles, Classify::Pixels];
     for stack in &stacks {
         let generic: VariantKey =
             format!("model={},max_layers={}", stack.model, stack.layers.len())
                 .parse()
                 .unwrap();
-        let modes: &[Mode] = if stack.surface.is_some() {
-            &[Mode::Generic]
+        let modes: &[(Mode, &[Classify])] = if stack.surface.is_some() {
+            routed += 1;
+            &[(Mode::Generic, &every), (Mode::Specialized, &sorted)]
         } else {
-            &[Mode::Generic, Mode::Specialized, Mode::Baked]
+            &[
+                (Mode::Generic, &[Classify::None]),
+                (Mode::Specialized, &every),
+                (Mode::Baked, &[Classify::None]),
+            ]
         };
-        for &mode in modes {
+        for &(mode, classify) in modes {
             let variant = VariantKey { mode, ..generic };
-            let d = both_paths(&mut renderer, variant, stack);
+            let d = both_paths(&mut renderer, variant, stack, classify);
             assert!(
                 d <= 1e-5,
-                "{} {variant}: deferred {d:.1e} from forward",
+                "{} {variant} {classify:?}: deferred {d:.1e} from forward",
                 stack.name
             );
-            cases += 1;
+            cases += classify.len();
         }
     }
-    assert!(cases > 30, "{cases} cases");
+    assert!(cases > 60 && routed >= 5, "{cases} cases, {routed} varying");
     renderer.set_mesh(&uv_sphere(32, 64)).unwrap();
-    let gold = Stack::load(&common::repo_path("assets/materials/varnished-gold.toml")).unwrap();
-    let d = both_paths(
-        &mut renderer,
-        "model=tm2,mode=specialized".parse().unwrap(),
-        &gold,
-    );
-    assert!(d <= 1e-5, "sphere: deferred {d:.1e} from forward");
+    for material in ["varnished-gold", "worn-lacquered-copper"] {
+        let stack = Stack::load(&common::repo_path(&format!(
+            "assets/materials/{material}.toml"
+        )))
+        .unwrap();
+        let variant = format!("model={},mode=specialized", stack.model);
+        let d = both_paths(&mut renderer, variant.parse().unwrap(), &stack, &sorted);
+        assert!(
+            d <= 1e-5,
+            "sphere, {material}: deferred {d:.1e} from forward"
+        );
+    }
     common::assert_validation_clean(&gpu);
 }
 
 #[test]
-fn the_deferred_path_refuses_a_varying_stack_under_specialization_by_name() {
+fn unclassified_deferred_shading_refuses_a_stack_of_several_classes_by_name() {
     let gpu = common::gpu();
     let mut renderer = renderer(&gpu);
     let stack = Stack::load(&common::repo_path(
@@ -125,7 +153,7 @@ fn the_deferred_path_refuses_a_varying_stack_under_specialization_by_name() {
     .unwrap();
     let err = renderer.prepare(&key).err().expect("refused").to_string();
     assert!(
-        err.contains("path=forward") && err.contains("mode=generic"),
+        err.contains("classify=pixels") && err.contains("path=forward"),
         "{err}"
     );
     let err = "model=tm2,path=sideways"

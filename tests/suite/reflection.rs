@@ -274,6 +274,10 @@ fn kernels() -> Vec<KernelInterface> {
         fgd::PROBE_KERNEL,
         eval::KERNEL,
         deferred::KERNEL,
+        deferred::BINS_KERNEL,
+        deferred::COUNT_KERNEL,
+        deferred::OFFSETS_KERNEL,
+        deferred::SCATTER_KERNEL,
         kernel::SPEC_ARRAY,
         calibrate::KERNEL,
     ]
@@ -298,6 +302,14 @@ fn define_sets(entry: &str) -> Vec<Vec<(&'static str, &'static str)>> {
             vec![("LAMINA_FP16", "1")],
             vec![("LAMINA_TARGET_RGBA32F", "1")],
         ]
+    } else if entry == "deferred_bins.comp.glsl" {
+        vec![
+            vec![],
+            vec![("LAMINA_FP16", "1")],
+            vec![("LAMINA_TARGET_RGBA32F", "1"), ("LAMINA_BIN_TILES", "1")],
+        ]
+    } else if entry == "bin_count.comp.glsl" {
+        vec![vec![], vec![("LAMINA_BIN_TILES", "1")]]
     } else if shades.contains(&entry) {
         vec![vec![], vec![("LAMINA_FP16", "1")]]
     } else {
