@@ -3,7 +3,10 @@
 //! per entry point, and `spec.json` with the values: input for offline compilers and shader
 //! analysers that take no specialization data. A varying stack under `mode=specialized`
 //! draws several pipelines (`render::classes`): each gets its own sub-directory of the same
-//! layout, `mark-layer-N/` for a stencil mark and `class-BB/` for a class of pixels.
+//! layout, `mark-layer-N/` for a stencil mark and `class-BB/` for a class of pixels. On the
+//! deferred path the shading kernels are exported: the one over every pixel, or a classified
+//! pass's kernel per class (`class-BB/`) and, classified by tile, the generic one its mixed
+//! tiles take (`mixed/`).
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -12,12 +15,14 @@ use anyhow::{bail, Context, Result};
 use lamina::imageio::write_file_atomically;
 use lamina::material::resolve_with_variant;
 use lamina::profile::plan::Case;
-use lamina::render::forward;
+use lamina::render::classes::Class;
 use lamina::render::lights::Lighting;
-use lamina::render::pass::MaterialKey;
+use lamina::render::pass::{MaterialKey, PassKey};
+use lamina::render::{deferred, forward};
 use lamina::shader::freeze::freeze;
+use lamina::shader::kernel::WorkGroupSpec;
 use lamina::shader::ShaderCompiler;
-use lamina::variant::{Mode, ShadeSpec};
+use lamina::variant::{Classify, Mode, ShadePath, ShadeSpec};
 use lamina::vk::SpecConstants;
 
 #[derive(clap::Args)]
@@ -73,35 +78,15 @@ pub fn run(args: &ExportArgs) -> Result<()> {
     }
     let material = stack.name.clone();
     let key = Case { variant, stack }.pass_key(&Lighting::default())?;
-    let vertex = forward::ENTRIES[0];
-    let draws: Vec<(PathBuf, Option<String>, [&str; 2], ShadeSpec)> = match &key.material {
-        MaterialKey::Classes(routing) => {
-            let marks = routing.marks.iter().map(|&layer| {
-                (
-                    args.out.join(format!("mark-layer-{}", layer + 1)),
-                    Some(format!("stencil mark of layer {}'s coverage", layer + 1)),
-                    [vertex, forward::MARK_ENTRY],
-                    key.mark_spec(layer),
-                )
-            });
-            let classes = routing.classes.iter().map(|class| {
-                let layers: Vec<String> =
-                    class.layers.iter().map(|m| (m + 1).to_string()).collect();
-                (
-                    args.out.join(format!("class-{:02x}", class.bits)),
-                    Some(format!(
-                        "class {:#04x}: layers [{}]",
-                        class.bits,
-                        layers.join(", ")
-                    )),
-                    forward::ENTRIES,
-                    key.class_spec(class),
-                )
-            });
-            marks.chain(classes).collect()
-        }
-        _ => vec![(args.out.clone(), None, forward::ENTRIES, key.spec(None))],
+    let draws = if variant.path == ShadePath::Deferred {
+        deferred_draws(&key, &args.out)?
+    } else {
+        forward_draws(&key, &args.out)
     };
+    let mut defines = variant.defines();
+    if variant.path == ShadePath::Deferred && variant.classify == Classify::Tiles {
+        defines.push(("LAMINA_BIN_TILES", "1"));
+    }
     let compiler = ShaderCompiler::new()?;
     for (dir, draw, entries, spec) in draws {
         let file = SpecFile {
@@ -111,9 +96,108 @@ pub fn run(args: &ExportArgs) -> Result<()> {
             modules: Vec::new(),
             constants: constants(&spec),
         };
-        export_draw(&compiler, &dir, &entries, file, &variant.defines())?;
+        export_draw(&compiler, &dir, &entries, file, &defines)?;
     }
     Ok(())
+}
+
+/// One pipeline to export: its directory, what it draws (a routed or classified pass's
+/// part), its entry points and its constants.
+type Draw = (PathBuf, Option<String>, Vec<&'static str>, ShadeSpec);
+
+/// The forward pass's draws: one, or a routed pass's stencil marks and classes.
+fn forward_draws(key: &PassKey, out: &Path) -> Vec<Draw> {
+    let vertex = forward::ENTRIES[0];
+    match &key.material {
+        MaterialKey::Classes(routing) => {
+            let marks = routing.marks.iter().map(|&layer| {
+                (
+                    out.join(format!("mark-layer-{}", layer + 1)),
+                    Some(format!("stencil mark of layer {}'s coverage", layer + 1)),
+                    vec![vertex, forward::MARK_ENTRY],
+                    key.mark_spec(layer),
+                )
+            });
+            let classes = routing.classes.iter().map(|class| {
+                (
+                    out.join(format!("class-{:02x}", class.bits)),
+                    Some(class_text(class)),
+                    forward::ENTRIES.to_vec(),
+                    key.class_spec(class),
+                )
+            });
+            marks.chain(classes).collect()
+        }
+        _ => vec![(
+            out.to_owned(),
+            None,
+            forward::ENTRIES.to_vec(),
+            key.spec(None),
+        )],
+    }
+}
+
+/// The deferred path's shading kernels (the G-buffer's draw and the classification shade
+/// nothing): the kernel over every pixel, or one per bin of a classified pass, a routed
+/// stack's classes in `class-BB/` and the tiles that mix them in `mixed/`.
+fn deferred_draws(key: &PassKey, out: &Path) -> Result<Vec<Draw>> {
+    let variant = key.variant;
+    let local = |spec: ShadeSpec| spec.with_local_size([deferred::TILE, deferred::TILE]);
+    let classes = match &key.material {
+        MaterialKey::Classes(routing) => routing.classes.as_slice(),
+        _ => &[],
+    };
+    if variant.classify == Classify::None {
+        let spec = match classes {
+            [] => key.spec(None),
+            [one] => key.class_spec(one),
+            _ => bail!(
+                "variant {variant}: the stack's pixels fall into {} classes, which \
+                 classify=none does not tell apart; export it with classify=pixels or tiles",
+                classes.len()
+            ),
+        };
+        return Ok(vec![(
+            out.to_owned(),
+            None,
+            vec![deferred::KERNEL.entry],
+            local(spec),
+        )]);
+    }
+    let bins = deferred::bin_specs(key, key.spec(None), variant.classify == Classify::Tiles);
+    if classes.is_empty() {
+        let (_, spec) = bins[0];
+        return Ok(vec![(
+            out.to_owned(),
+            None,
+            vec![deferred::BINS_KERNEL.entry],
+            local(spec),
+        )]);
+    }
+    Ok(bins
+        .into_iter()
+        .map(|(bin, spec)| {
+            let (dir, text) = match classes.iter().find(|c| c.bits == bin) {
+                Some(class) => (format!("class-{bin:02x}"), class_text(class)),
+                None => (
+                    "mixed".to_string(),
+                    "the tiles whose pixels mix classes: the generic pipeline".to_string(),
+                ),
+            };
+            (
+                out.join(dir),
+                Some(text),
+                vec![deferred::BINS_KERNEL.entry],
+                local(spec),
+            )
+        })
+        .collect())
+}
+
+/// A class of pixels as `spec.json` names it: its bits and its layers.
+fn class_text(class: &Class) -> String {
+    let layers: Vec<String> = class.layers.iter().map(|m| (m + 1).to_string()).collect();
+    format!("class {:#04x}: layers [{}]", class.bits, layers.join(", "))
 }
 
 /// Writes `entries` frozen to `file`'s constants into `dir`, then `file` (with the modules)

@@ -290,8 +290,8 @@ impl DeferredPipelines {
 
 /// Each bin a classified pass shades and its pipeline's constants: a routed stack's classes
 /// (and for tiles the mixed bin, shaded by the generic pipeline holding every layer), or bin
-/// 0 with the pass's own.
-fn bin_specs(key: &PassKey, spec: ShadeSpec, tiles: bool) -> Vec<(u32, ShadeSpec)> {
+/// 0 with the pass's own `spec`.
+pub fn bin_specs(key: &PassKey, spec: ShadeSpec, tiles: bool) -> Vec<(u32, ShadeSpec)> {
     let MaterialKey::Classes(routing) = &key.material else {
         return vec![(0, spec)];
     };

@@ -643,18 +643,24 @@ fn check_target(
         }
     }
     let material = resolve(&t.material)?.name;
-    let on_material: Vec<&Point> = points
-        .iter()
-        .filter(|p| p.case.stack.name == material)
-        .collect();
+    let against_material = match &t.against_material {
+        Some(m) => Some(resolve(m)?.name),
+        None => None,
+    };
     let patterns = [
-        Some(("match", &t.matches)),
-        t.against.as_ref().map(|a| ("against", a)),
+        Some(("match", &t.matches, &material)),
+        t.against.as_ref().map(|a| {
+            let on = against_material.as_ref().unwrap_or(&material);
+            ("against", a, on)
+        }),
     ];
-    for (name, pattern) in patterns.into_iter().flatten() {
+    for (name, pattern, material) in patterns.into_iter().flatten() {
         VariantKey::parse_over(pattern, VariantKey::default())
             .map_err(|e| bad(file, &field(name), &e.to_string()))?;
-        let found = on_material.iter().any(|p| p.case.variant.matches(pattern));
+        let found = points
+            .iter()
+            .filter(|p| p.case.stack.name == *material)
+            .any(|p| p.case.variant.matches(pattern));
         if !found {
             return Err(bad(
                 file,
@@ -665,6 +671,7 @@ fn check_target(
     }
     Ok(Target {
         material,
+        against_material,
         ..t.clone()
     })
 }

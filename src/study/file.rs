@@ -156,6 +156,10 @@ pub struct Target {
     pub against: Option<String>,
     /// A preset or material file in the sweep file; the material's name once loaded.
     pub material: String,
+    /// The material of the `against` run, where it is another (the divergence study: a mask
+    /// against the coherent stack of its mean layer count); as `material`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub against_material: Option<String>,
     pub max: f64,
     /// How far a ratio of median times may exceed `max` and still meet it, as a fraction: a
     /// timing's noise, which the study states (a ratio of times gets no verdict without it).

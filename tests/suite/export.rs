@@ -107,6 +107,52 @@ fn a_routed_pass_exports_each_of_its_draws() {
     }
 }
 
+/// On the deferred path the shading kernels are exported: a classified pass's kernel per class
+/// and, by tile, the generic kernel of its mixed tiles, each frozen (the work group's width
+/// included, SpecId 6); an unclassified pass of several classes is refused by name.
+#[test]
+fn a_classified_deferred_pass_exports_its_kernel_per_bin() {
+    let dir = common::scratch_dir("export-deferred");
+    let args = |variant: &'static str, out: &'static str| {
+        [
+            "export",
+            "--variant",
+            variant,
+            "--material",
+            "worn-lacquered-copper",
+            "--out",
+            out,
+        ]
+    };
+    let out = lamina(
+        &args("mode=specialized,path=deferred,classify=tiles", "x"),
+        &dir,
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    for (bin, id, value) in [("class-01", 8, 2), ("class-00", 8, 1), ("mixed", 7, 0)] {
+        let path = dir.join("x").join(bin).join("deferred_bins.comp.spv");
+        spirv_val(&path);
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&std::fs::read(&path).unwrap());
+        assert_eq!(spec_constant_count(&words).unwrap(), 0, "{bin}");
+        let spec: serde_json::Value = serde_json::from_slice(
+            &std::fs::read(dir.join("x").join(bin).join("spec.json")).unwrap(),
+        )
+        .unwrap();
+        let constants = spec["constants"].as_array().unwrap();
+        let constant = |id: u32| constants.iter().find(|c| c["id"] == id).unwrap()["bits"].clone();
+        assert_eq!(constant(id), value, "{bin}: SpecId {id}");
+        assert_eq!(constant(6), 8, "{bin}: the work group's width");
+    }
+    let refused = lamina(&args("mode=specialized,path=deferred", "y"), &dir);
+    assert!(!refused.status.success());
+    assert!(
+        text(&refused.stderr).contains("classify=pixels"),
+        "{}",
+        text(&refused.stderr)
+    );
+    assert!(!dir.join("y").exists());
+}
+
 #[test]
 fn export_refuses_baked_passes_and_unknown_materials_by_name() {
     let dir = common::scratch_dir("export-refused");

@@ -25,18 +25,19 @@ pub(super) fn target_ratio<'a>(
     let r = &s.results;
     // The ggx baseline answers a pattern only when the pattern names it: `mode=generic,
     // max_layers=2` means the study's own generic run, not the baseline that shares its axes.
-    let on = |pattern: &str| {
+    let on = |pattern: &str, material: &str| {
         let wants_ggx = pattern.split(',').any(|p| p.trim() == "model=ggx");
         r.runs.iter().find(|run| {
-            run.material == t.material
+            run.material == material
                 && run.variant.matches(pattern)
                 && (wants_ggx || !run.is_baseline())
         })
     };
-    let run = on(&t.matches)?;
+    let run = on(&t.matches, &t.material)?;
+    let other = t.against_material.as_deref().unwrap_or(&t.material);
     let against = match &t.against {
-        Some(pattern) => on(pattern)?,
-        None => r.baseline_of(&t.material)?,
+        Some(pattern) => on(pattern, other)?,
+        None => r.baseline_of(other)?,
     };
     let (ratio, basis) = main_ratio(r, run, against);
     Some((ratio, basis, run, against))
@@ -98,9 +99,13 @@ pub(super) fn targets_section(md: &mut String, s: &StudyDir) {
         match target_ratio(s, t) {
             Some((ratio, basis, run, against)) => {
                 let (measured, verdict) = target_verdict(ratio, basis, t);
+                let on = match &t.against_material {
+                    Some(m) => format!(" on {m}"),
+                    None => String::new(),
+                };
                 let _ = writeln!(
                     md,
-                    "| {} | `{}` on {} | `{}` | {measured} | ≤ {:.2}× | {verdict} |",
+                    "| {} | `{}` on {} | `{}`{on} | {measured} | ≤ {:.2}× | {verdict} |",
                     t.label,
                     run.variant.short(),
                     t.material,

@@ -275,6 +275,7 @@ fn targets_pivot_dilution_and_bake_error_are_reported() {
         matches: "mode=baked".into(),
         against: None,
         material: material.into(),
+        against_material: None,
         max: 1.5,
         tolerance: None,
     };
@@ -327,6 +328,12 @@ fn targets_pivot_dilution_and_bake_error_are_reported() {
                     against: Some("mode=generic".into()),
                     ..target("baked against generic", "gold")
                 },
+                // Against another material's run.
+                Target {
+                    against: Some("mode=baked".into()),
+                    against_material: Some("copper".into()),
+                    ..target("gold against copper", "gold")
+                },
             ],
             bake_error: vec![MaterialBakeError {
                 material: "gold".into(),
@@ -357,6 +364,7 @@ fn targets_pivot_dilution_and_bake_error_are_reported() {
         "| baked on gold | `model=tm2,max_layers=4,mode=baked` on gold | `model=ggx,max_layers=4` | 1.20× (JIT instructions per pixel) | ≤ 1.50× | met |",
         "| 1.60× (JIT instructions per pixel) | ≤ 1.50× | missed by 7 % |",
         "| baked against generic | `model=tm2,max_layers=4,mode=baked` on gold | `model=tm2,max_layers=16` | 0.12× (JIT instructions per pixel) |",
+        "| gold against copper | `model=tm2,max_layers=4,mode=baked` on gold | `model=tm2,max_layers=4,mode=baked` on copper |",
         "`generic` 6.00–10.00× (median 10.00×); `baked` 1.20–1.60× (median 1.60×)",
         "`generic` costs 3.75–8.33× (median 8.33×) `baked` on the same material.",
         "Whole-draw counts dilute the ratios: a run's whole-draw ×ggx at 24x24 is 0.40–0.94× (median 0.92×) of its per-pixel ×ggx",
@@ -429,6 +437,7 @@ fn a_verdict_agrees_with_the_figure_it_prints() {
         matches: "model=tm2".into(),
         against: None,
         material: "gold".into(),
+        against_material: None,
         max,
         tolerance,
     };
