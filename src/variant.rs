@@ -54,6 +54,12 @@ pub enum VariantError {
     },
     #[error("variant axis `{0}` is given twice")]
     Duplicate(String),
+    #[error("`{given}` needs `{needs}`: {why}")]
+    Needs {
+        given: String,
+        needs: &'static str,
+        why: &'static str,
+    },
 }
 
 /// An axis whose values are a closed set of names, each with its spec-constant code.
@@ -649,12 +655,11 @@ impl VariantKey {
             seen.push(AXES.iter().find(|a| **a == axis).expect("matched above"));
         }
         if key.classify != Classify::None && key.path != ShadePath::Deferred {
-            return Err(VariantError::BadValue {
-                key: "classify".into(),
-                value: key.classify.to_string(),
-                allowed: "none on the forward path; tiles and pixels classify the \
-                          deferred path's pixels (add path=deferred)"
-                    .into(),
+            return Err(VariantError::Needs {
+                given: format!("classify={}", key.classify),
+                needs: "path=deferred",
+                why: "it sorts the deferred path's pixels by class; the forward path's \
+                      routing is the stencil's",
             });
         }
         Ok(key)
@@ -710,7 +715,11 @@ mod tests {
         let e = "model=tm2,classify=tiles"
             .parse::<VariantKey>()
             .unwrap_err();
-        assert!(e.to_string().contains("add path=deferred"), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with("`classify=tiles` needs `path=deferred`"),
+            "{e}"
+        );
         let e = "path=deferred,classify=cells"
             .parse::<VariantKey>()
             .unwrap_err();
