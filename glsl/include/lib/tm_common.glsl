@@ -310,15 +310,17 @@ LayerGpu tm_layer(uint i) {
 // the material's energy ratios (μ_k = k/(P − 1)): the interval and the weight of its upper end
 // (src/model/transport.rs's `interpolate`). Found once per evaluation; each lobe then reads
 // its layer's interval.
+// The conversions are signed: x is never negative, and a CPU converts between floats and
+// signed integers in one vector instruction, unsigned ones in several.
 struct TmTransportAt {
-    uint k;
+    int k;
     float f;
 };
 
 TmTransportAt tm_transport_at(float mu) {
-    const uint P = LAMINA_TRANSPORT_POINTS;
-    float x = clamp(mu, 0.0, 1.0) * float(P - 1u);
-    uint k = min(uint(x), P - 2u);
+    const int P = int(LAMINA_TRANSPORT_POINTS);
+    float x = clamp(mu, 0.0, 1.0) * float(P - 1);
+    int k = min(int(x), P - 2);
     return TmTransportAt(k, x - float(k));
 }
 
@@ -326,7 +328,7 @@ TmTransportAt tm_transport_at(float mu) {
 // transmittance) at `at`: one interval's three words (bindings/shading.glsl's
 // TransportRatios), the lower end plus the weighted change.
 vec3 tm_transport_ratio(uint row, TmTransportAt at) {
-    uvec3 packed = transport[row * (LAMINA_TRANSPORT_POINTS - 1u) + at.k].xyz;
+    uvec3 packed = transport[row * (LAMINA_TRANSPORT_POINTS - 1u) + uint(at.k)].xyz;
     vec2 rg = unpackHalf2x16(packed.x);
     vec2 b_dr = unpackHalf2x16(packed.y);
     vec2 dgb = unpackHalf2x16(packed.z);
