@@ -184,7 +184,7 @@ pub enum Shading {
 /// A classified deferred pass: the classification's kernels and one shading kernel per bin.
 pub struct Binned {
     /// Items are 8×8 tiles (else pixels).
-    pub tiles: bool,
+    tiles: bool,
     /// The marks' material layers, 4 bits each, and their count.
     marks: u32,
     mark_count: u32,
@@ -193,7 +193,7 @@ pub struct Binned {
     scatter: ComputeKernel,
     /// Each bin that may hold items, and the kernel that shades it: a routed stack's classes
     /// the most layers first (then, for tiles, the mixed bin's generic kernel); else bin 0.
-    pub bins: Vec<(u32, ComputeKernel)>,
+    bins: Vec<(u32, ComputeKernel)>,
 }
 
 impl DeferredPipelines {
