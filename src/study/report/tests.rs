@@ -8,9 +8,34 @@ use super::runs::{executable_stats_table, FLAG_BIT};
 use super::sections::target_verdict;
 use super::*;
 use crate::profile::results::{CounterInfo, DeviceInfo, Results, Run};
+use crate::render::scene::Scene;
 use crate::study::meta::{BakeErrorRow, MaterialBakeError, PointMeta, StudyMeta};
 use crate::study::{Published, Target};
 use crate::variant::VariantKey;
+
+/// Results of an llvmpipe run of `scene` with every field a test does not look at filled in;
+/// tests override what they read.
+fn llvmpipe_results(scene: Scene) -> Results {
+    Results {
+        device: DeviceInfo {
+            name: "llvmpipe".into(),
+            driver: "llvmpipe Mesa".into(),
+            api_version: "1.3".into(),
+            vendor_id: 0x10005,
+            subgroup_size: None,
+        },
+        git_rev: "0".into(),
+        command: "c".into(),
+        size: [8, 8],
+        lp_num_threads: Some("0".into()),
+        scene,
+        counter: None,
+        lighting: None,
+        environment: None,
+        calibration: None,
+        runs: Vec::new(),
+    }
+}
 
 #[test]
 fn a_line_is_fitted_exactly() {
@@ -71,20 +96,8 @@ fn the_reading_names_agreement_rebuilds_and_fp16_emulation() {
         results: Results {
             device: DeviceInfo {
                 name: "llvmpipe (LLVM 15.0.6, 256 bits)".into(),
-                driver: "llvmpipe Mesa".into(),
-                api_version: "1.3".into(),
-                vendor_id: 0x10005,
-                subgroup_size: None,
+                ..llvmpipe_results(Scene::Sphere).device
             },
-            git_rev: "0".into(),
-            command: "c".into(),
-            size: [8, 8],
-            lp_num_threads: Some("0".into()),
-            scene: crate::render::scene::Scene::Sphere,
-            counter: None,
-            lighting: None,
-            environment: None,
-            calibration: None,
             runs: vec![
                 run(&key("model=ggx"), 1.0, 2_000_000, 8_000_000),
                 // 34 M outside the JIT code against the baseline's 6 M: rebuilt.
@@ -98,6 +111,7 @@ fn the_reading_names_agreement_rebuilds_and_fp16_emulation() {
                 run(&key("model=tm6,max_layers=2"), 20.0, 15_000_000, 21_000_000),
                 run(&key("model=tm2,max_layers=4"), 4.4, 6_000_000, 12_000_000),
             ],
+            ..llvmpipe_results(Scene::Sphere)
         },
         meta: StudyMeta {
             name: "n".into(),
@@ -174,29 +188,15 @@ fn per_pixel_counts_are_the_main_figure() {
     let study = StudyDir {
         dir: PathBuf::from("x"),
         results: Results {
-            device: DeviceInfo {
-                name: "llvmpipe".into(),
-                driver: "llvmpipe Mesa".into(),
-                api_version: "1.3".into(),
-                vendor_id: 0x10005,
-                subgroup_size: None,
-            },
-            git_rev: "0".into(),
-            command: "c".into(),
-            size: [8, 8],
-            lp_num_threads: Some("0".into()),
-            scene: crate::render::scene::Scene::FullScreen,
             counter: Some(CounterInfo {
                 sizes: [[48, 48], [96, 96]],
                 shaded_pixels: [2304, 9216],
             }),
-            lighting: None,
-            environment: None,
-            calibration: None,
             runs: vec![
                 counted("model=ggx", 1_000_000, 300.0, 1.0),
                 counted("model=tm2,max_layers=4", 5_000_000, 2400.0, 8.0),
             ],
+            ..llvmpipe_results(Scene::FullScreen)
         },
         meta: StudyMeta {
             name: "n".into(),
@@ -282,26 +282,12 @@ fn targets_pivot_dilution_and_bake_error_are_reported() {
     let study = StudyDir {
         dir: PathBuf::from("x"),
         results: Results {
-            device: DeviceInfo {
-                name: "llvmpipe".into(),
-                driver: "llvmpipe Mesa".into(),
-                api_version: "1.3".into(),
-                vendor_id: 0x10005,
-                subgroup_size: None,
-            },
-            git_rev: "0".into(),
-            command: "c".into(),
-            size: [8, 8],
-            lp_num_threads: Some("0".into()),
-            scene: crate::render::scene::Scene::Sphere,
             counter: Some(CounterInfo {
                 sizes: [[24, 24], [48, 48]],
                 shaded_pixels: [300, 1200],
             }),
-            lighting: None,
-            environment: None,
-            calibration: None,
             runs,
+            ..llvmpipe_results(Scene::Sphere)
         },
         meta: StudyMeta {
             name: "n".into(),
@@ -581,22 +567,6 @@ fn divergence_is_read_per_variant_against_its_own_coherent_runs() {
         "model=tm2,max_layers=5,path=deferred",
     );
     let results = Results {
-        device: DeviceInfo {
-            name: "llvmpipe".into(),
-            driver: "llvmpipe Mesa".into(),
-            api_version: "1.3".into(),
-            vendor_id: 0x10005,
-            subgroup_size: None,
-        },
-        git_rev: "0".into(),
-        command: "c".into(),
-        size: [8, 8],
-        lp_num_threads: Some("0".into()),
-        scene: crate::render::scene::Scene::FullScreen,
-        counter: None,
-        lighting: None,
-        environment: None,
-        calibration: None,
         runs: vec![
             with("model=ggx", "low", 100.0, (1, 1.0, 1)),
             with(forward, "low", 1000.0, (1, 1.0, 1)),
@@ -606,6 +576,7 @@ fn divergence_is_read_per_variant_against_its_own_coherent_runs() {
             with(deferred, "high", 5400.0, (5, 5.0, 5)),
             with(deferred, "noise", 3300.0, (1, 3.0, 5)),
         ],
+        ..llvmpipe_results(Scene::FullScreen)
     };
     let lines = divergence(&results);
     assert_eq!(lines.len(), 2, "{lines:?}");
