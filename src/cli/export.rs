@@ -148,15 +148,7 @@ fn deferred_draws(key: &PassKey, out: &Path) -> Result<Vec<Draw>> {
         _ => &[],
     };
     if variant.classify == Classify::None {
-        let spec = match classes {
-            [] => key.spec(None),
-            [one] => key.class_spec(one),
-            _ => bail!(
-                "variant {variant}: the stack's pixels fall into {} classes, which \
-                 classify=none does not tell apart; export it with classify=pixels or tiles",
-                classes.len()
-            ),
-        };
+        let spec = deferred::grid_spec(key, key.spec(None))?;
         return Ok(vec![(
             out.to_owned(),
             None,

@@ -26,7 +26,7 @@
 
 use ash::vk::ImageUsageFlags;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::shader::kernel::{KernelInterface, KernelSpec};
 use crate::variant::{Classify, Mode, ShadeSpec, VariantKey};
@@ -214,11 +214,7 @@ impl DeferredPipelines {
         }
         let tiles = match key.variant.classify {
             Classify::None => {
-                // A routed stack whose coverage leaves one class everywhere needs no bins.
-                let spec = match &key.material {
-                    MaterialKey::Classes(routing) => key.class_spec(&routing.classes[0]),
-                    _ => spec,
-                };
+                let spec = grid_spec(key, spec)?;
                 let kernel = ComputeKernel::build(gpu, &KERNEL, &defines, &shared, spec)?;
                 return Ok(Self {
                     gbuffer,
@@ -285,6 +281,26 @@ impl DeferredPipelines {
             }
         }
         out
+    }
+}
+
+/// The constants of `classify=none`'s one kernel over every pixel: the pass's own `spec`, or
+/// for a routed stack whose coverage leaves one class everywhere that class's; a routed stack
+/// of several classes, each needing its own pipeline, is refused by name.
+pub fn grid_spec(key: &PassKey, spec: ShadeSpec) -> Result<ShadeSpec> {
+    match &key.material {
+        MaterialKey::Classes(routing) => match routing.classes.as_slice() {
+            [one] => Ok(key.class_spec(one)),
+            classes => Err(Error::Unsupported(format!(
+                "variant {}: the stack's pixels fall into {} classes, each shaded by its own \
+                 pipeline, which classify=none does not tell apart; classify them \
+                 (classify=pixels or classify=tiles), or shade the stack with path=forward, \
+                 or under mode=generic",
+                key.variant,
+                classes.len()
+            ))),
+        },
+        _ => Ok(spec),
     }
 }
 

@@ -269,23 +269,10 @@ impl Builder<'_> {
         defines: &[(&'static str, &'static str)],
     ) -> Result<DeferredPipelines> {
         let variant = key.variant;
-        match &key.material {
-            MaterialKey::Classes(routing)
-                if variant.classify == Classify::None && routing.classes.len() > 1 =>
-            {
-                return Err(Error::Unsupported(format!(
-                    "variant {variant}: a varying stack under mode=specialized shades each \
-                     class of pixels with its own pipeline, which classify=none does not \
-                     tell apart; classify them (classify=pixels or classify=tiles), or shade \
-                     it with path=forward, or under mode=generic"
-                )))
-            }
-            MaterialKey::Reference(_) => {
-                return Err(Error::Unsupported(
-                    "the reference image is drawn by the forward path only".into(),
-                ))
-            }
-            _ => {}
+        if matches!(key.material, MaterialKey::Reference(_)) {
+            return Err(Error::Unsupported(
+                "the reference image is drawn by the forward path only".into(),
+            ));
         }
         let fragment = self.gpu.shaders.compile(GBUFFER_ENTRY, defines)?;
         let name = format!("g-buffer {variant}");
