@@ -89,23 +89,28 @@ Tm2Factors tm2_factor(uint i, inout float eta_above, inout float cos_i) {
     return c;
 }
 
-// Pass 1: the factors of every layer for view cosine `mu`, following the mean direction down
-// the stack by Snell's law (§4.1). A generic pipeline stops at the conductor; a specialized one
-// knows it is the last layer, and unrolls.
-void tm2_factors(float mu, inout Tm2Factors comps[MAX_LAYERS], out uint count) {
+// The factors of every layer, written by pass 1 and read by pass 2. A module-scope array, not a
+// parameter: GLSL passes an array parameter by copy in and out, whole, and llvmpipe's compute
+// path paid that copy in every slot of MAX_LAYERS (about 250 instructions per pixel each).
+Tm2Factors tm2_comps[MAX_LAYERS];
+
+// Pass 1: the factors of every layer for view cosine `mu` into `tm2_comps`, following the mean
+// direction down the stack by Snell's law (§4.1). A generic pipeline stops at the conductor; a
+// specialized one knows it is the last layer, and unrolls.
+void tm2_factors(float mu, out uint count) {
     float eta_above = IOR_AIR;
     float cos_i = mu;
     if (SPECIALIZED) {
         count = LAYER_COUNT;
         [[unroll]] for (uint i = 0u; i < LAYER_COUNT; ++i) {
-            comps[i] = tm2_factor(i, eta_above, cos_i);
+            tm2_comps[i] = tm2_factor(i, eta_above, cos_i);
         }
         return;
     }
     count = tm_layer_count();
     for (uint i = 0u; i < count; ++i) {
-        comps[i] = tm2_factor(i, eta_above, cos_i);
-        if (comps[i].conductor || (DIFFUSE_BASE != 0u && comps[i].diffuse)) {
+        tm2_comps[i] = tm2_factor(i, eta_above, cos_i);
+        if (tm2_comps[i].conductor || (DIFFUSE_BASE != 0u && tm2_comps[i].diffuse)) {
             count = i + 1u;
             return;
         }
@@ -193,22 +198,21 @@ void tm2_add(uint i, Tm2Factors c, float g_next, inout Tm2State s, inout vec3 tr
 // lobe (tm_transmitted_alpha; 0 where TRANSMITS is 0).
 uint tm2_evaluate(float mu, out vec3 reflectance, out vec3 transmittance,
                   out float transmitted_alpha) {
-    Tm2Factors comps[MAX_LAYERS];
     uint count;
-    tm2_factors(mu, comps, count);
+    tm2_factors(mu, count);
 
     Tm2State s = Tm2State(tm_slab_empty(), tm_slab1_empty(), real3(0.0), real(0.0), 1.0,
                           tm_transport_at(mu), vec3(0.0));
     transmittance = vec3(1.0);
     if (SPECIALIZED) {
         [[unroll]] for (uint i = 0u; i < LAYER_COUNT; ++i) {
-            float g_next = i + 1u < LAYER_COUNT ? comps[i + 1u].gr : 0.0;
-            tm2_add(i, comps[i], g_next, s, transmittance);
+            float g_next = i + 1u < LAYER_COUNT ? tm2_comps[i + 1u].gr : 0.0;
+            tm2_add(i, tm2_comps[i], g_next, s, transmittance);
         }
     } else {
         for (uint i = 0u; i < count; ++i) {
-            float g_next = i + 1u < count ? comps[i + 1u].gr : 0.0;
-            tm2_add(i, comps[i], g_next, s, transmittance);
+            float g_next = i + 1u < count ? tm2_comps[i + 1u].gr : 0.0;
+            tm2_add(i, tm2_comps[i], g_next, s, transmittance);
         }
     }
     reflectance = TRANSPORT == TRANSPORT_CORRECTED ? s.emitted : vec3(s.r_prev);
