@@ -267,6 +267,18 @@ axis!(
     }
 );
 
+axis!(
+    /// How many colour channels one walk of the 6-flux model carries (issue 28 item 5;
+    /// `lib/tm6.glsl`).
+    Channels, "channels", {
+        /// All three at once: the energy and g-weighted slabs are 198 floats.
+        Rgb = "rgb",
+        /// One at a time, the walk repeated per channel: a third of the slabs live at once,
+        /// each walk's scalar factors computed three times.
+        Serial = "serial",
+    }
+);
+
 /// The directions `ibl=taps` reads per lobe.
 pub const IBL_TAP_COUNT: u32 = 32;
 
@@ -298,6 +310,8 @@ pub struct VariantKey {
     pub path: ShadePath,
     /// How the deferred path sends pixels to its pipelines (`none` on the forward path).
     pub classify: Classify,
+    /// How many colour channels a 6-flux walk carries.
+    pub channels: Channels,
 }
 
 impl Default for VariantKey {
@@ -316,6 +330,7 @@ impl Default for VariantKey {
             ibl: Ibl::SplitSum,
             path: ShadePath::Forward,
             classify: Classify::None,
+            channels: Channels::Rgb,
         }
     }
 }
@@ -334,6 +349,7 @@ pub const AXES: &[&str] = &[
     "ibl",
     "path",
     "classify",
+    "channels",
 ];
 
 /// Layers whose numeric values a `specialized-values` pipeline holds as constants, and the
@@ -506,13 +522,17 @@ impl VariantKey {
         }
     }
 
-    /// Preprocessor definitions: only the axes that change types or layouts.
+    /// Preprocessor definitions: only the axes that change types or layouts (the serial
+    /// 6-flux walk's values are floats, not vectors).
     pub fn defines(&self) -> Vec<(&'static str, &'static str)> {
+        let mut defines = Vec::new();
         if self.fp16 {
-            vec![("LAMINA_FP16", "1")]
-        } else {
-            Vec::new()
+            defines.push(("LAMINA_FP16", "1"));
         }
+        if self.channels == Channels::Serial {
+            defines.push(("LAMINA_TM6_SERIAL", "1"));
+        }
+        defines
     }
 }
 
@@ -546,6 +566,9 @@ impl fmt::Display for VariantKey {
         }
         if self.classify != Classify::None {
             write!(f, ",classify={}", self.classify)?;
+        }
+        if self.channels != Channels::Rgb {
+            write!(f, ",channels={}", self.channels)?;
         }
         Ok(())
     }
@@ -645,6 +668,7 @@ impl VariantKey {
                 "ibl" => key.ibl = Ibl::parse_value(value)?,
                 "path" => key.path = ShadePath::parse_value(value)?,
                 "classify" => key.classify = Classify::parse_value(value)?,
+                "channels" => key.channels = Channels::parse_value(value)?,
                 _ => {
                     return Err(VariantError::UnknownAxis {
                         key: axis.into(),
@@ -660,6 +684,13 @@ impl VariantKey {
                 needs: "path=deferred",
                 why: "it sorts the deferred path's pixels by class; the forward path's \
                       routing is the stencil's",
+            });
+        }
+        if key.channels != Channels::Rgb && key.model != Model::Tm6 {
+            return Err(VariantError::Needs {
+                given: format!("channels={}", key.channels),
+                needs: "model=tm6",
+                why: "it walks the 6-flux model's slabs one colour channel at a time",
             });
         }
         Ok(key)
@@ -764,6 +795,13 @@ mod tests {
                                                     Classify::VALUES[keys.len() / 2 % 3].1
                                                 } else {
                                                     Classify::None
+                                                },
+                                                channels: if model == Model::Tm6
+                                                    && keys.len() % 3 == 0
+                                                {
+                                                    Channels::Serial
+                                                } else {
+                                                    Channels::Rgb
                                                 },
                                             });
                                         }
@@ -878,5 +916,31 @@ mod tests {
         assert!(k.defines().is_empty());
         let fp16: VariantKey = "fp16=on".parse().unwrap();
         assert_eq!(fp16.defines(), vec![("LAMINA_FP16", "1")]);
+        let serial: VariantKey = "model=tm6,channels=serial,fp16=on".parse().unwrap();
+        assert_eq!(
+            serial.defines(),
+            vec![("LAMINA_FP16", "1"), ("LAMINA_TM6_SERIAL", "1")]
+        );
+    }
+
+    #[test]
+    fn serial_channels_need_the_six_flux_model() {
+        let key: VariantKey = "model=tm6,channels=serial".parse().unwrap();
+        assert!(
+            key.to_string().ends_with(",mode=generic,channels=serial"),
+            "{key}"
+        );
+        let rgb: VariantKey = "model=tm2,channels=rgb".parse().unwrap();
+        assert!(rgb.to_string().ends_with(",mode=generic"), "{rgb}");
+        let e = "model=tm2,channels=serial"
+            .parse::<VariantKey>()
+            .unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("`channels=serial` needs `model=tm6`"),
+            "{e}"
+        );
+        let e = "model=tm6,channels=mono".parse::<VariantKey>().unwrap_err();
+        assert!(e.to_string().contains("rgb, serial"), "{e}");
     }
 }

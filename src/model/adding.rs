@@ -362,18 +362,30 @@ impl Slab6 {
     }
 
     /// This g-weighted stack with each flux and operator entry bounded by the energy stack's
-    /// ([`bound`]).
+    /// ([`bound`]). A channel whose R′ the bound moved takes q = I − R′; the others keep
+    /// theirs: every channel is composed on its own, as the 2-flux [`Slab::bounded_by`] does,
+    /// which lets the shader walk the channels one at a time (`channels=serial`).
     pub fn bounded_by(&self, energy: &Slab6) -> Slab6 {
         let vec = |g: &[Rgb; 3], e: &[Rgb; 3]| -> [Rgb; 3] {
             std::array::from_fn(|k| map3(|c| bound(g[k][c], e[k][c])))
         };
         let mat = |g: &Mat3, e: &Mat3| -> Mat3 { std::array::from_fn(|i| vec(&g[i], &e[i])) };
         let rp = mat(&self.rp, &energy.rp);
-        let q = if rp == self.rp {
-            self.q
-        } else {
-            sub3(&identity3(), &rp)
-        };
+        let moved: [bool; 3] = std::array::from_fn(|c| {
+            (0..9).any(|e| rp[e / 3][e % 3][c] != self.rp[e / 3][e % 3][c])
+        });
+        let reset = sub3(&identity3(), &rp);
+        let q = std::array::from_fn(|i| {
+            std::array::from_fn(|j| {
+                map3(|c| {
+                    if moved[c] {
+                        reset[i][j][c]
+                    } else {
+                        self.q[i][j][c]
+                    }
+                })
+            })
+        });
         Slab6 {
             up: vec(&self.up, &energy.up),
             down: vec(&self.down, &energy.down),

@@ -11,7 +11,9 @@ use crate::material::simplify::simplify;
 use crate::material::{presets, Stack};
 use crate::model::LayerParams;
 use crate::render::scene::Camera;
-use crate::variant::{Axis, Classify, Fgd, Ibl, Mode, Model, Ndf, ShadePath, Tir, VariantKey, G2};
+use crate::variant::{
+    Axis, Channels, Classify, Fgd, Ibl, Mode, Model, Ndf, ShadePath, Tir, VariantKey, G2,
+};
 
 use super::layer_edit::{
     coverage_editor, coverage_of, coverage_value, describe, layer_editor, rgb_row, CoverageEdit,
@@ -303,6 +305,12 @@ impl Panels {
         choose(ui, "fgd", &mut v.fgd, Fgd::VALUES);
         choose(ui, "g2", &mut v.g2, G2::VALUES);
         choose(ui, "ndf", &mut v.ndf, Ndf::VALUES);
+        // The 6-flux walk: every colour channel at once, or one at a time.
+        if v.model == Model::Tm6 {
+            choose(ui, "channels", &mut v.channels, Channels::VALUES);
+        } else {
+            v.channels = Channels::Rgb;
+        }
         // generic: one pipeline for every stack; specialized: rebuilt when an edit changes
         // the stack's structure; specialized-values and baked: rebuilt on every edit.
         choose(ui, "mode", &mut v.mode, Mode::VALUES);

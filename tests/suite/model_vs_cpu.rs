@@ -172,7 +172,7 @@ fn six_flux_emits_its_largest_lobe_count_on_the_gpu() {
 /// default G2 form's: the other forms pair with the cheaper tables (each 4-D grid is 64⁴
 /// texels of 1024 samples, about 50 s on two cores of lavapipe; the GPU-vs-CPU comparison of
 /// the model does not depend on which form built the table both sides read).
-const VARIANTS: [&str; 26] = [
+const VARIANTS: [&str; 28] = [
     "model=tm2,max_layers=16",
     "model=tm6,max_layers=16",
     "model=tm2,max_layers=4,fp16=on",
@@ -199,6 +199,8 @@ const VARIANTS: [&str; 26] = [
     "model=tm6,max_layers=2,g2=smith",
     "model=tm2,tir=fit,fgd=4d,fp16=on",
     "model=tm6,tir=fit,g2=schlick",
+    "model=tm6,channels=serial,max_layers=8",
+    "model=tm6,channels=serial,tir=lut32,fp16=on",
 ];
 
 #[test]

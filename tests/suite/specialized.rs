@@ -1,6 +1,7 @@
 //! Per-material pipelines shade what the generic one shades (issue 11 §5): the GPU evaluator
 //! (`tm_eval.comp.glsl`, the forward pass's library) under `mode=specialized` and
-//! `mode=specialized-values` against `mode=generic`, every preset under both models plus stacks
+//! `mode=specialized-values` against `mode=generic` (and the 6-flux walk one colour channel at a
+//! time, `channels=serial`, in every mode), every preset under both models plus stacks
 //! that take every structural branch (smooth interfaces, index-matched and clear interfaces,
 //! TIR traps, media and none, with and without a conductor), at 256 view cosines from grazing to
 //! normal; and a baked table's lobes against the model between its samples.
@@ -151,9 +152,23 @@ fn specialized_pipelines_evaluate_what_the_generic_one_does() {
             },
         )
         .unwrap();
-        for mode in ["specialized", "specialized-values"] {
+        // The 6-flux walk one channel at a time (`channels=serial`) runs the same arithmetic
+        // per channel, in every mode.
+        let serial: &[&str] = if model == Model::Tm6 {
+            &[
+                "mode=specialized,channels=serial",
+                "mode=specialized-values,channels=serial",
+                "max_layers=16,channels=serial",
+            ]
+        } else {
+            &[]
+        };
+        for key in ["mode=specialized", "mode=specialized-values"]
+            .iter()
+            .chain(serial)
+        {
             let variant = VariantKey::parse_over(
-                &format!("mode={mode}"),
+                key,
                 VariantKey {
                     model,
                     ..VariantKey::default()

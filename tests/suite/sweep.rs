@@ -521,6 +521,7 @@ fn every_committed_sweep_file_expands() {
         "growth",
         "specialization",
         "specialized-scaling",
+        "channels",
     ] {
         let (studies, _) = study::load(&dir.join(format!("{name}.toml"))).unwrap();
         assert_eq!(
