@@ -242,7 +242,10 @@ fn print_image_errors(results: &Results) {
         if let Some(e) = run.image_error {
             let mut parts = Vec::new();
             if let Some(f) = run.reference_flip_floor {
-                parts.push(format!("noise floor {f:.4}"));
+                parts.push(format!(
+                    "noise floor {f:.4}, a difference significant from {:.4}",
+                    lamina::study::charts::SIGNIFICANT_FLOORS * f
+                ));
             }
             if let (Some(l), Some(m)) = (run.lighting_error, run.model_error) {
                 parts.push(format!("lighting {:.4}, model {:.4}", l.flip, m.flip));

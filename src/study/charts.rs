@@ -21,25 +21,45 @@ fn run_cost(run: &Run, instructions: bool) -> Option<f64> {
     }
 }
 
-/// The runs of `material` on its Pareto front of (FLIP, cost): no other run of the material
-/// is at most as costly and at most as wrong, and better in one.
+/// How many noise floors apart two runs' FLIPs must be for the report to call them different:
+/// a reference's noise floor is the FLIP between it and the same reference from the next seed,
+/// so a difference within a few floors may be the reference's noise. At four, the floor
+/// printed beside an error is at most a quarter of any difference the report resolves.
+pub const SIGNIFICANT_FLOORS: f64 = 4.0;
+
+/// The smallest FLIP difference between runs `a` and `b` the report calls significant
+/// ([`SIGNIFICANT_FLOORS`] times the larger of their references' noise floors; 0 where
+/// neither was measured, and then any difference is one).
+pub fn significant_flip(a: &Run, b: &Run) -> f64 {
+    let floor = |r: &Run| r.reference_flip_floor.unwrap_or(0.0);
+    SIGNIFICANT_FLOORS * floor(a).max(floor(b))
+}
+
+/// The runs of `material` on its Pareto front of (FLIP, cost), cheapest first: the cheapest
+/// run (the closest of equally cheap ones), then each run significantly closer to the
+/// reference ([`significant_flip`]) than the last one taken before it. A run off the front
+/// has a cheaper run on it that is not resolvably farther from the reference. With no noise
+/// floor measured this is the classic front: no run is at most as costly and at most as
+/// wrong, and better in one.
 pub fn pareto_front(results: &Results, material: &str, instructions: bool) -> Vec<usize> {
-    let points: Vec<(usize, f64, f64)> = results
+    let mut points: Vec<(usize, f64, f64)> = results
         .runs
         .iter()
         .enumerate()
         .filter(|(_, r)| r.material == material)
         .filter_map(|(i, r)| Some((i, r.image_error?.flip, run_cost(r, instructions)?)))
         .collect();
-    points
-        .iter()
-        .filter(|&&(_, e, c)| {
-            !points
-                .iter()
-                .any(|&(_, e2, c2)| e2 <= e && c2 <= c && (e2 < e || c2 < c))
-        })
-        .map(|&(i, _, _)| i)
-        .collect()
+    points.sort_by(|a, b| a.2.total_cmp(&b.2).then(a.1.total_cmp(&b.1)));
+    let mut front: Vec<(usize, f64, f64)> = Vec::new();
+    for (i, e, c) in points {
+        let taken = front.last().is_none_or(|&(j, e_front, _)| {
+            e < e_front && e_front - e >= significant_flip(&results.runs[i], &results.runs[j])
+        });
+        if taken {
+            front.push((i, e, c));
+        }
+    }
+    front.into_iter().map(|(i, _, _)| i).collect()
 }
 
 /// How a run is named on a chart or in a table: its coordinates, else the baseline, else its

@@ -1,5 +1,5 @@
 //! The report's tables of a study's runs: every run with its time and counts against ggx, the
-//! fragment stage's statistics where the driver reports them, and — for several materials over
+//! shading stage's statistics where the driver reports them, and — for several materials over
 //! one other axis — each material's ratios side by side.
 
 use std::fmt::Write as _;
@@ -164,23 +164,24 @@ pub(super) fn executable_stats_line(r: &Results) -> Option<String> {
     ))
 }
 
-/// The fragment stage's name among a pipeline's executables, as drivers spell it.
-fn is_fragment(executable: &serde_json::Value) -> bool {
+/// Whether an executable is the stage named `long` (`fragment`, `compute`) or `short` (`FS`,
+/// `CS`), as drivers spell it.
+fn is_stage(executable: &serde_json::Value, long: &str, short: &str) -> bool {
     ["name", "description"].iter().any(|k| {
         executable[k]
             .as_str()
-            .is_some_and(|t| t.to_ascii_lowercase().contains("fragment") || t == "FS")
+            .is_some_and(|t| t.to_ascii_lowercase().contains(long) || t == short)
     })
 }
 
-/// The fragment executable's statistics of a run, by name, where the driver reports them.
-fn fragment_stats(run: &Run) -> Option<Vec<(String, serde_json::Value)>> {
-    let exe = run
-        .executable_stats
-        .as_ref()?
-        .as_array()?
+/// The shading stage's statistics of a run, by name, where the driver reports them: the
+/// fragment executable's, or a compute pipeline's (the deferred path's shading kernel).
+fn shading_stats(run: &Run) -> Option<Vec<(String, serde_json::Value)>> {
+    let executables = run.executable_stats.as_ref()?.as_array()?;
+    let exe = executables
         .iter()
-        .find(|e| is_fragment(e))?;
+        .find(|e| is_stage(e, "fragment", "FS"))
+        .or_else(|| executables.iter().find(|e| is_stage(e, "compute", "CS")))?;
     Some(
         exe["statistics"]
             .as_array()?
@@ -194,7 +195,7 @@ fn fragment_stats(run: &Run) -> Option<Vec<(String, serde_json::Value)>> {
 /// Size` as 2^36 plus the bytes, the ggx shader's included): stripped, and said so.
 pub(super) const FLAG_BIT: u64 = 1 << 36;
 
-/// The table's rows again, with the fragment stage's pipeline-executable statistics (registers,
+/// The table's rows again, with the shading stage's pipeline-executable statistics (registers,
 /// code size, local memory …) where the driver reports them: the statistics that differ between
 /// the rows as columns, the others in one line below.
 pub(super) fn executable_stats_table(
@@ -203,7 +204,7 @@ pub(super) fn executable_stats_table(
     rows: &[(Vec<String>, &Run)],
 ) {
     let stats: Vec<Option<Vec<(String, serde_json::Value)>>> =
-        rows.iter().map(|(_, run)| fragment_stats(run)).collect();
+        rows.iter().map(|(_, run)| shading_stats(run)).collect();
     if stats.iter().all(Option::is_none) {
         return;
     }
@@ -245,7 +246,8 @@ pub(super) fn executable_stats_table(
         (0..names.len()).partition(|&k| (1..rows.len()).any(|i| shown(i, k) != shown(0, k)));
     let _ = writeln!(
         md,
-        "Fragment stage, as the driver compiled it (`VK_KHR_pipeline_executable_properties`):\n"
+        "Shading stage (the fragment shader; on the deferred path the shading kernel), as the \
+         driver compiled it (`VK_KHR_pipeline_executable_properties`):\n"
     );
     let _ = write!(md, "| {header_axes} | material |");
     for &k in &varying {

@@ -8,7 +8,7 @@ use std::path::Path;
 use crate::profile::image_error::{error_map_path, fp32_error_map_path};
 use crate::profile::results::{ImageError, Run};
 use crate::reference::compare::{MaterialReference, ReferenceRow};
-use crate::study::charts::{pareto_front, reference_chart_stem, run_label};
+use crate::study::charts::{pareto_front, reference_chart_stem, run_label, SIGNIFICANT_FLOORS};
 use crate::study::dirs::StudyDir;
 use crate::study::{Published, Target};
 
@@ -184,8 +184,12 @@ fn image_error_intro(md: &mut String, s: &StudyDir, counted: bool) {
          alone cost), and *model*, that reference against the exact model's (what its lobes \
          alone cost; both references from one seed, so their noise largely cancels). FLIP \
          does not add: each part is the FLIP of its two images, and the whole lies within \
-         their sum. A run is on the Pareto front when no run of its \
-         material is both cheaper ({}) and closer.\n",
+         their sum. Two FLIPs differ significantly when they are at least {} noise floors \
+         (the larger of the two runs') apart: the floor is then at most a quarter of any \
+         difference the report resolves. A run is on the Pareto front when it is \
+         significantly closer to the reference than every cheaper run of its material on the \
+         front (cost: {}); a run off it has a cheaper one that is not resolvably farther.\n",
+        SIGNIFICANT_FLOORS,
         if counted {
             "JIT instructions per pixel"
         } else {
@@ -249,8 +253,8 @@ pub(super) fn image_error_section(md: &mut String, s: &StudyDir, out_dir: &Path)
     if !dominated.is_empty() {
         let _ = writeln!(
             md,
-            "Dominated (another run of the material is cheaper and closer to the reference): \
-             {}.\n",
+            "Dominated (a cheaper run of the material on the front is not significantly \
+             farther from the reference): {}.\n",
             dominated.join("; ")
         );
     }

@@ -410,6 +410,29 @@ fn the_stats_table_shows_what_differs_and_strips_the_flag_bit() {
     );
     assert!(md.contains("without bit 36"), "{md}");
 
+    // A deferred run's shading pipeline is a compute kernel: its executable's statistics.
+    let mut c = run("model=tm2,max_layers=4,path=deferred", 1.0, 1, 1);
+    c.executable_stats = Some(serde_json::json!([
+        {"name": "CS", "description": "compute", "statistics": [
+            {"name": "Register Count", "value": 72},
+            {"name": "Local Memory Size", "value": FLAG_BIT},
+            {"name": "Binary Size", "value": 4096}]},
+    ]));
+    let mut deferred = String::new();
+    executable_stats_table(
+        &mut deferred,
+        "path",
+        &[
+            (vec!["forward".to_string()], &a),
+            (vec!["deferred".to_string()], &c),
+        ],
+    );
+    assert!(
+        deferred.contains("| path | material | Register Count | Local Memory Size |")
+            && deferred.contains("| deferred | gold | 72 | 0 |"),
+        "{deferred}"
+    );
+
     let mut none = String::new();
     let plain = run("model=ggx", 1.0, 1, 1);
     executable_stats_table(&mut none, "model", &[(vec!["ggx".to_string()], &plain)]);
@@ -592,4 +615,35 @@ fn divergence_is_read_per_variant_against_its_own_coherent_runs() {
         "{}",
         lines[1]
     );
+}
+
+#[test]
+fn the_pareto_front_steps_only_by_resolvable_differences() {
+    use crate::profile::results::ImageError;
+    use crate::study::charts::pareto_front;
+    let scored = |variant: &str, cost: f64, flip: f64, floor: Option<f64>| {
+        let mut r = run(variant, cost, 1, 1);
+        r.image_error = Some(ImageError {
+            flip,
+            rmse: 0.0,
+            max_relative: 0.0,
+        });
+        r.reference_flip_floor = floor;
+        r
+    };
+    // Cheapest first: 0.30; 0.27 is within four floors (0.04) of it; 0.20 is not, and the
+    // dearest run is not below 0.20 by four floors either.
+    let mut results = llvmpipe_results(Scene::FullScreen);
+    results.runs = vec![
+        scored("model=tm2,ibl=taps", 9.0, 0.19, Some(0.01)),
+        scored("model=tm2", 1.0, 0.30, Some(0.01)),
+        scored("model=tm2,ibl=matched", 2.0, 0.27, Some(0.01)),
+        scored("model=tm2,max_layers=8", 3.0, 0.20, Some(0.01)),
+    ];
+    assert_eq!(pareto_front(&results, "gold", false), vec![1, 3]);
+    // Unmeasured floors: the classic front, every strictly closer dearer run.
+    for r in &mut results.runs {
+        r.reference_flip_floor = None;
+    }
+    assert_eq!(pareto_front(&results, "gold", false), vec![1, 2, 3, 0]);
 }
