@@ -220,6 +220,55 @@ vec3 reference_environment(vec3 n, vec3 view, float alpha, bool diffuse, bool be
     return c * white + sum / float(REFERENCE_SAMPLES);
 }
 
+#ifdef LAMINA_REFERENCE_EVALUATED
+// The reference of a varying stack (render::reference::render_evaluated): each pixel's lobes
+// are evaluated here, from its maps, by the shader library of the pass's variant (the models
+// hand them to tm_emit_lobe one by one), and each is integrated as shade_reference integrates a
+// tabulated one: its weight over the white lobe's albedo E (white_albedo, the table the
+// lights normalise by, of the variant's G2), times its integral against the lights and the
+// unfiltered environment. `behind`: a thin slab's transmitted lobe.
+void reference_emit(vec3 weight, float alpha, bool diffuse, bool retro, bool behind) {
+    float a = diffuse ? 1.0 : max(alpha, LIGHT_MIN_ALPHA);
+    float white = diffuse ? 1.0 : white_albedo(shade_n_dot_v, a);
+    vec3 view = retro ? 2.0 * dot(shade_n, shade_v) * shade_n - shade_v : shade_v;
+    vec3 radiance = reference_lights(shade_n, view, a, diffuse, behind);
+    if (frame.params.y > 0.0) {
+        radiance += frame.params.y
+            * reference_environment(shade_n, view, a, diffuse, behind, white);
+    }
+    shade_sum += weight / white * radiance;
+}
+
+void tm_emit_lobe(vec3 weight, float alpha, uint kind) {
+    reference_emit(weight, alpha, kind == LOBE_DIFFUSE, kind == LOBE_RETRO, false);
+}
+
+// The pixel's lobes in the pass's model (model=ggx: shade_ggx's one lobe, F0·A + B from the
+// split-sum table, and 1 − that through a thin slab), integrated as they come.
+vec3 shade_reference_evaluated(vec3 n, vec3 v, float n_dot_v) {
+    vec3 transmittance;
+    float transmitted_alpha;
+    if (MODEL == MODEL_GGX) {
+        LayerGpu top = tm_layer(0u);
+        transmitted_alpha = top.params.x;
+        vec2 ab = texture(split_sum, vec2(n_dot_v, sqrt(transmitted_alpha))).rg;
+        vec3 albedo = vec3(f0_complex(top.ior.rgb, top.kappa.rgb)) * ab.x + ab.y;
+        reference_emit(albedo, transmitted_alpha, false, false, false);
+        transmittance = max(vec3(1.0) - albedo, vec3(0.0));
+    } else {
+        vec3 reflectance;
+        if (MODEL == MODEL_TM6) {
+            tm6_evaluate(n_dot_v, reflectance, transmittance, transmitted_alpha);
+        } else {
+            tm2_evaluate(n_dot_v, reflectance, transmittance, transmitted_alpha);
+        }
+    }
+    if (TRANSMITS != 0u) {
+        reference_emit(transmittance, transmitted_alpha, false, false, true);
+    }
+    return shade_sum;
+}
+#else
 vec3 shade_reference(vec3 n, vec3 v, float n_dot_v) {
     float u = (sqrt(n_dot_v) * float(BAKED_SIZE - 1u) + 0.5) / float(BAKED_SIZE);
     vec3 sum = vec3(0.0);
@@ -243,6 +292,7 @@ vec3 shade_reference(vec3 n, vec3 v, float n_dot_v) {
     return sum;
 }
 #endif
+#endif
 
 void main() {
     vec3 n = normalize(world_normal);
@@ -253,7 +303,14 @@ void main() {
     reference_state = reference_hash(uint(gl_FragCoord.x)
         ^ reference_hash(uint(gl_FragCoord.y)
         ^ reference_hash(uint(frame.params.z) ^ floatBitsToUint(frame.params.w))));
+#ifdef LAMINA_REFERENCE_EVALUATED
+    if (SURFACE_MAPS != 0u) {
+        tm_surface_begin(surface_uv, gl_FragCoord.xy);
+    }
+    vec3 radiance = shade_reference_evaluated(n, v, n_dot_v);
+#else
     vec3 radiance = shade_reference(n, v, n_dot_v);
+#endif
 #else
     vec3 radiance = shade_point(world_position, n, v, surface_uv, gl_FragCoord.xy);
 #endif

@@ -188,7 +188,6 @@ fn run_reference(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
     let env_path = asset_path(&scene.env);
     let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
     let stack = Stack::resolve(&scene.material)?;
-    stack.require_uniform("`lamina render --reference`")?;
     let layers = stack.params();
     let gpu = global.open_gpu()?;
     let mut renderer =
@@ -205,23 +204,48 @@ fn run_reference(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
         .progress_chars("=> "),
     );
     bar.set_prefix("reference");
-    eprintln!(
-        "tabulating the exact model at {} view cosines…",
-        reference::TABLE_SIZE
-    );
     let stop = stop_on_interrupt();
-    let image = reference::render(
-        &mut renderer,
-        stack.model,
-        &layers,
-        (width, height),
-        convergence,
-        &mut |done, total| {
-            bar.set_length(u64::from(total));
-            bar.set_position(u64::from(done));
-        },
-        stop,
-    )?;
+    let mut progress = |done, total| {
+        bar.set_length(u64::from(total));
+        bar.set_position(u64::from(done));
+    };
+    let size = (width, height);
+    let image = match &stack.surface {
+        None => {
+            eprintln!(
+                "tabulating the exact model at {} view cosines…",
+                reference::TABLE_SIZE
+            );
+            reference::render(
+                &mut renderer,
+                stack.model,
+                &layers,
+                size,
+                convergence,
+                &mut progress,
+                stop,
+            )?
+        }
+        Some(surface) => {
+            eprintln!(
+                "{} varies over the surface: each pixel's lobes evaluated from its maps with {} \
+                 (the model's finest tables, not its exact integrals)",
+                stack.name,
+                reference::evaluated_variant(reference::exact_stand_in(stack.model), layers.len())
+                    .short()
+            );
+            reference::render_evaluated(
+                &mut renderer,
+                reference::exact_stand_in(stack.model),
+                &layers,
+                Some(surface),
+                size,
+                convergence,
+                &mut progress,
+                stop,
+            )?
+        }
+    };
     let Some(image) = image else {
         bar.abandon();
         anyhow::bail!("interrupted; nothing was written");

@@ -5,10 +5,12 @@
 //! default 67 pixels per degree. The FLIP error map (magma) is what a reader looks at.
 
 use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 
 use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::imageio::{tonemap, HdrImage};
+use crate::material::Surface;
 use crate::model::LayerParams;
 use crate::render::lights::Lighting;
 use crate::render::reference::{self, Convergence, ReferenceImage};
@@ -93,8 +95,9 @@ pub fn compare(
 /// against the reference of the case's own lobes ([`reference_image`]), and model, that reference
 /// against the exact model's — and, for a half-precision case, its error against its
 /// single-precision twin: one [`CaseImageError`] per case, in plan
-/// order, and the error maps by case ([`error_map_path`]). Cases of a stack that varies over
-/// the surface get none (the reference renders uniform stacks).
+/// order, and the error maps by case ([`error_map_path`]). A stack that varies over the
+/// surface has its references' lobes evaluated per pixel from its maps
+/// (`reference::render_evaluated`; the exact model's by [`reference::exact_stand_in`]).
 pub fn measure(
     gpu: &Gpu,
     equirect: &HdrImage,
@@ -116,14 +119,11 @@ pub fn measure(
     let mut frames: Vec<Option<Vec<[f32; 4]>>> = vec![None; cases.len()];
     for (i, case) in cases.iter().enumerate() {
         progress("image error", i, cases.len());
-        if case.stack.surface.is_some() {
-            continue;
-        }
         let layers = case.stack.params();
-        renderer.set_surface(None)?;
         let key = ReferenceKey {
             model: case.stack.model,
             layers: layers.clone(),
+            surface: case.stack.surface.clone(),
             scene: config.scene,
             size: (width, height),
             lighting: config.lighting.clone(),
@@ -138,6 +138,7 @@ pub fn measure(
         references.render_missing(&mut renderer, &key, lobes, &never)?;
         let (image, floor) = references.find(&key).expect("rendered above");
         let own = references.find_lobes(&key, lobes).expect("rendered above");
+        renderer.set_surface(case.stack.surface.as_ref())?;
         let pass = passes.get(&mut renderer, &case.pass_key(&config.lighting)?)?;
         let frame = renderer.render(pass, &layers, width, height)?;
         let (error, map) = compare(&frame.pixels, &image.pixels, width, height);
@@ -204,21 +205,36 @@ fn reference_image(
         seed,
     };
     let (layers, size, quiet) = (&key.layers, key.size, &mut |_, _| {});
-    match own {
-        None => reference::render(renderer, key.model, layers, size, convergence, quiet, never),
-        Some(variant) => {
+    match (own, &key.surface) {
+        (None, None) => {
+            renderer.set_surface(None)?;
+            reference::render(renderer, key.model, layers, size, convergence, quiet, never)
+        }
+        (Some(variant), None) => {
+            renderer.set_surface(None)?;
             reference::render_variant(renderer, variant, layers, size, convergence, quiet, never)
         }
+        (own, Some(surface)) => reference::render_evaluated(
+            renderer,
+            own.unwrap_or_else(|| reference::exact_stand_in(key.model)),
+            layers,
+            Some(surface),
+            size,
+            convergence,
+            quiet,
+            never,
+        ),
     }
     .map(|image| image.expect("an image-error reference is never stopped"))
 }
 
-/// What a reference image depends on, under one environment: the stack in its model, the
-/// scene and size, the lighting, the samples and their seed.
+/// What a reference image depends on, under one environment: the stack in its model (and
+/// its maps), the scene and size, the lighting, the samples and their seed.
 #[derive(Clone, PartialEq)]
 struct ReferenceKey {
     model: Model,
     layers: Vec<LayerParams>,
+    surface: Option<Arc<Surface>>,
     scene: Scene,
     size: (u32, u32),
     lighting: Lighting,

@@ -68,7 +68,7 @@ impl ForwardPass {
                 gpu.device.report.name
             )));
         }
-        let reference = matches!(key.material, MaterialKey::Reference(_));
+        let reference = key.is_reference();
         let shape = baked.as_ref().map(|(table, _)| {
             let shape = table.shape;
             if reference {
@@ -83,6 +83,9 @@ impl ForwardPass {
         let mut defines = variant.defines();
         if reference {
             defines.push(("LAMINA_REFERENCE", "1"));
+        }
+        if key.material == MaterialKey::Evaluated {
+            defines.push(("LAMINA_REFERENCE_EVALUATED", "1"));
         }
         let builder = Builder {
             gpu,
@@ -269,7 +272,7 @@ impl Builder<'_> {
         defines: &[(&'static str, &'static str)],
     ) -> Result<DeferredPipelines> {
         let variant = key.variant;
-        if matches!(key.material, MaterialKey::Reference(_)) {
+        if key.is_reference() {
             return Err(Error::Unsupported(
                 "the reference image is drawn by the forward path only".into(),
             ));

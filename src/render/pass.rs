@@ -40,6 +40,10 @@ pub enum MaterialKey {
     /// A reference pass (`render::reference`): this stack's exact lobes, integrated by Monte
     /// Carlo.
     Reference(Vec<LayerParams>),
+    /// A reference pass that evaluates each pixel's lobes with its variant's shader library
+    /// (any stack that fits, maps included) and integrates them by Monte Carlo
+    /// (`render::reference::render_evaluated`).
+    Evaluated,
 }
 
 /// One shading pass's identity.
@@ -144,12 +148,42 @@ impl PassKey {
         }
     }
 
+    /// The key of the reference pass that evaluates `variant`'s lobes of `layers` (with the
+    /// maps of `surface`) per pixel: `variant` is the lobes' (`render::reference::
+    /// evaluated_variant`).
+    pub fn evaluated_reference(
+        variant: VariantKey,
+        layers: &[LayerParams],
+        surface: Option<&Surface>,
+        lighting: &Lighting,
+    ) -> Self {
+        Self {
+            variant,
+            material: MaterialKey::Evaluated,
+            surface: surface.map_or(0, |s| s.maps.spec_bits()),
+            diffuse: ends_diffuse(layers),
+            transmits: ends_transmissive(layers),
+            lights: !lighting.lights.is_empty(),
+        }
+    }
+
+    /// Whether this is a reference pass (`LAMINA_REFERENCE`).
+    pub fn is_reference(&self) -> bool {
+        matches!(
+            self.material,
+            MaterialKey::Reference(_) | MaterialKey::Evaluated
+        )
+    }
+
     /// The stack a per-material pass is built for (`None` under `mode=generic` and
     /// `specialized`).
     pub fn layers(&self) -> Option<&[LayerParams]> {
         match &self.material {
             MaterialKey::Values { layers, .. } | MaterialKey::Reference(layers) => Some(layers),
-            MaterialKey::Any | MaterialKey::Structure(_) | MaterialKey::Classes(_) => None,
+            MaterialKey::Any
+            | MaterialKey::Structure(_)
+            | MaterialKey::Classes(_)
+            | MaterialKey::Evaluated => None,
         }
     }
 
@@ -158,7 +192,10 @@ impl PassKey {
     pub fn spec(&self, baked: Option<BakedShape>) -> ShadeSpec {
         let mut spec = self.variant.spec();
         match &self.material {
-            MaterialKey::Any | MaterialKey::Reference(_) | MaterialKey::Classes(_) => {}
+            MaterialKey::Any
+            | MaterialKey::Reference(_)
+            | MaterialKey::Classes(_)
+            | MaterialKey::Evaluated => {}
             MaterialKey::Structure(structure) => structure.specialize(&mut spec),
             MaterialKey::Values { structure, layers } => {
                 structure.specialize(&mut spec);
@@ -228,7 +265,9 @@ impl PassKey {
             )));
         }
         let same = match &self.material {
-            MaterialKey::Any => return check_generic_fit(self.variant, layers),
+            MaterialKey::Any | MaterialKey::Evaluated => {
+                return check_generic_fit(self.variant, layers)
+            }
             MaterialKey::Structure(own) => {
                 Structure::of(self.variant.model, layers).ok().as_ref() == Some(own)
             }

@@ -12,13 +12,20 @@
 //! (the baked table's error study: below 5e-4 at 512 samples). Each frame draws
 //! [`SAMPLES_PER_FRAME`] samples per lobe and light disk per pixel; the host averages frames
 //! in f64 and estimates each pixel's standard error from their spread.
+//!
+//! A stack that varies over the surface has a stack per pixel, which no table over the view
+//! cosine holds: its references evaluate each pixel's lobes in the pass from its maps, with a
+//! variant's shader library ([`render_evaluated`]), and integrate them alike. The exact model's
+//! is then stood in for by its finest tables ([`exact_stand_in`]).
 
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
+use crate::material::Surface;
 use crate::model::fgd::ExactFgd;
 use crate::model::light::{lobe_albedo, MIN_ALPHA};
 use crate::model::oracle::evaluate_model;
@@ -27,10 +34,11 @@ use crate::model::{ends_transmissive, Evaluation, LayerParams, Lobe};
 use crate::reference::compare::ExactTir;
 use crate::shader::specialize::{BakedShape, MAX_BAKED_LOBES};
 use crate::tables::split_sum::SplitSumTable;
-use crate::variant::{Mode, Model, VariantKey, G2};
+use crate::variant::{self, Classify, Ibl, Mode, Model, ShadePath, Tir, VariantKey, G2};
 
 use super::baked::{sample_cos, BakedTable};
 use super::eval::GpuEvaluator;
+use super::forward::ForwardPass;
 use super::Renderer;
 
 /// View cosines the host evaluates the model at.
@@ -417,12 +425,82 @@ fn render_table(
     model: Model,
     layers: &[LayerParams],
     table: BakedTable,
-    (width, height): (u32, u32),
+    size: (u32, u32),
     convergence: Convergence,
     progress: &mut dyn FnMut(u32, u32),
     stop: &AtomicBool,
 ) -> Result<Option<ReferenceImage>> {
     let pass = renderer.prepare_reference(model, layers, table)?;
+    accumulate(renderer, &pass, layers, size, convergence, progress, stop)
+}
+
+/// The variant whose lobes stand for the exact model's where they cannot be tabulated (a
+/// stack that varies over the surface, [`render_evaluated`]): the model's tables at their
+/// finest — the TIR table in 32-bit floats, the full 4-D FGD table — in single precision.
+/// How far its references lie from the exact model's is measured on the uniform presets
+/// (`cargo test --test suite reference_image::`, profiling/README.md "Image-based lighting").
+pub fn exact_stand_in(model: Model) -> VariantKey {
+    VariantKey {
+        model,
+        tir: Tir::Lut32,
+        fgd: variant::Fgd::Full4d,
+        ..VariantKey::default()
+    }
+}
+
+/// The variant an evaluated reference pass of `variant`'s lobes is built with, for a stack of
+/// `layer_count` layers: the lobes are the model's at the variant's tables, precision aside,
+/// so the pass is the generic one (the specialized pipelines' lobes are its, within 1e-5:
+/// `cargo test --test suite specialized::`), in the forward path, its layer array fitted to
+/// the stack, in single precision (the reference's integration is written in floats; an
+/// `fp16=on` variant's lobes stand in by its single-precision twin's, so its rounding counts
+/// in the lighting part), lit by nothing of its own (`ibl` only lights a real-time pass).
+pub fn evaluated_variant(variant: VariantKey, layer_count: usize) -> VariantKey {
+    VariantKey {
+        max_layers: (layer_count as u32).clamp(1, crate::variant::MAX_LAYERS_LIMIT),
+        fp16: false,
+        mode: Mode::Generic,
+        ibl: Ibl::SplitSum,
+        path: ShadePath::Forward,
+        classify: Classify::None,
+        ..variant
+    }
+}
+
+/// The reference image of `variant`'s lobes of `layers`, each pixel's evaluated by the
+/// variant's shader library from its maps (those of `surface`, which `renderer` then holds,
+/// [`Renderer::set_surface`]; none for a uniform stack) and integrated as [`render`]
+/// integrates tabulated ones. With [`exact_stand_in`] it stands in for [`render`]'s exact
+/// model where the stack varies over the surface; with a real-time variant it is
+/// [`render_variant`]'s for such a stack.
+#[allow(clippy::too_many_arguments)]
+pub fn render_evaluated(
+    renderer: &mut Renderer<'_>,
+    variant: VariantKey,
+    layers: &[LayerParams],
+    surface: Option<&Arc<Surface>>,
+    size: (u32, u32),
+    convergence: Convergence,
+    progress: &mut dyn FnMut(u32, u32),
+    stop: &AtomicBool,
+) -> Result<Option<ReferenceImage>> {
+    convergence.check()?;
+    let variant = evaluated_variant(variant, layers.len());
+    renderer.set_surface(surface)?;
+    let pass = renderer.prepare_evaluated_reference(variant, layers, surface.map(|s| &**s))?;
+    accumulate(renderer, &pass, layers, size, convergence, progress, stop)
+}
+
+/// Renders `pass`'s frames of `layers` until `convergence` holds and averages them.
+fn accumulate(
+    renderer: &mut Renderer<'_>,
+    pass: &ForwardPass,
+    layers: &[LayerParams],
+    (width, height): (u32, u32),
+    convergence: Convergence,
+    progress: &mut dyn FnMut(u32, u32),
+    stop: &AtomicBool,
+) -> Result<Option<ReferenceImage>> {
     let frames = convergence.spp.div_ceil(SAMPLES_PER_FRAME);
     let mut accumulator = Accumulator::new((width * height) as usize);
     renderer.seed = stream(convergence.seed);
@@ -431,7 +509,7 @@ fn render_table(
             return Ok(None);
         }
         renderer.frame_index = f;
-        let frame = renderer.render(&pass, layers, width, height)?;
+        let frame = renderer.render(pass, layers, width, height)?;
         if frame
             .pixels
             .iter()

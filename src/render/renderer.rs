@@ -308,6 +308,26 @@ impl<'g> Renderer<'g> {
         self.pass(key, Some((table, texture)))
     }
 
+    /// The reference pass that evaluates `variant`'s lobes of `layers` per pixel, with the
+    /// maps of `surface` (`render::reference::render_evaluated`).
+    pub fn prepare_evaluated_reference(
+        &mut self,
+        variant: VariantKey,
+        layers: &[LayerParams],
+        surface: Option<&Surface>,
+    ) -> Result<ForwardPass> {
+        if self.target != TargetFormat::Float {
+            return Err(Error::Unsupported(
+                "a reference pass averages frames finer than a half float: render it into a \
+                 float target (TargetFormat::Float)"
+                    .into(),
+            ));
+        }
+        let key = PassKey::evaluated_reference(variant, layers, surface, &self.lighting);
+        self.inputs.prepare(variant)?;
+        self.pass(key, None)
+    }
+
     fn pass(&self, key: PassKey, baked: Option<(BakedTable, BakedTexture)>) -> Result<ForwardPass> {
         ForwardPass::new(
             self.gpu,

@@ -20,6 +20,7 @@ mod model_gpu;
 mod model_vs_cpu;
 mod pipeline_cache;
 mod reference;
+mod reference_maps;
 mod reflection;
 mod render;
 mod shard;

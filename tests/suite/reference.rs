@@ -273,10 +273,6 @@ fn a_reference_render_refuses_bad_arguments_by_name() {
         (vec!["--spp", "9999999"], "1 to 1048576 samples"),
         (vec!["--noise", "2"], "--noise 2"),
         (vec!["--variant", "fp16=on"], "leave out --variant"),
-        (
-            vec!["--material", "patchy-patina"],
-            "varies over the surface",
-        ),
     ] {
         let mut full = vec!["render", "--reference", "--size", "16x16"];
         full.extend_from_slice(&args);

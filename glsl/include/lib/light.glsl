@@ -23,6 +23,13 @@ float light_alpha(float alpha, float angular_radius) {
     return min(max(alpha, LIGHT_ALPHA_FLOOR) + tan(0.5 * angular_radius), 1.0);
 }
 
+// E(μ_v, α): the white GGX lobe's directional albedo, from the shading set's table (vertex-
+// centred texels, src/tables/lobe_albedo.rs: x·(n − 1) + ½ texels in).
+float white_albedo(float n_dot_v, float alpha) {
+    vec2 at = (vec2(n_dot_v, sqrt(alpha)) * (LOBE_ALBEDO_SIZE - 1.0) + 0.5) / LOBE_ALBEDO_SIZE;
+    return textureLod(lobe_albedo, at, 0.0).r;
+}
+
 // The normalised lobe's response to a unit irradiance arriving along l (unit, towards the
 // light), times μ_l: D·G2 / (4 μ_v E(μ_v, α)). `n_dot_v` is the view cosine the model was
 // evaluated at; a retro lobe (6-flux back-scatter) is the same lobe about the view's mirror
@@ -36,10 +43,7 @@ float light_lobe(vec3 n, vec3 v, float n_dot_v, vec3 l, float alpha, bool retro)
     vec3 h = normalize(view + l);
     float d = float(ndf(real(max(dot(n, h), 0.0)), real(alpha)));
     float g2 = float(masking_shadowing(real(n_dot_l), real(n_dot_v), real(alpha)));
-    // Vertex-centred texels (src/tables/lobe_albedo.rs): x·(n − 1) + ½ texels in.
-    vec2 at = (vec2(n_dot_v, sqrt(alpha)) * (LOBE_ALBEDO_SIZE - 1.0) + 0.5) / LOBE_ALBEDO_SIZE;
-    float e = textureLod(lobe_albedo, at, 0.0).r;
-    return d * g2 / (4.0 * n_dot_v * e);
+    return d * g2 / (4.0 * n_dot_v * white_albedo(n_dot_v, alpha));
 }
 
 #endif

@@ -179,6 +179,9 @@ vec3 shade_ggx(vec3 n, vec3 v, float n_dot_v) {
     return radiance;
 }
 
+// The reference pass over a varying stack integrates each lobe by Monte Carlo instead
+// (forward.frag.glsl's own tm_emit_lobe).
+#ifndef LAMINA_REFERENCE_EVALUATED
 void tm_emit_lobe(vec3 weight, float alpha, uint kind) {
     if (kind == LOBE_DIFFUSE) {
         shade_sum += weight * diffuse_light();
@@ -188,6 +191,7 @@ void tm_emit_lobe(vec3 weight, float alpha, uint kind) {
     vec3 around = retro ? shade_v : reflect(-shade_v, shade_n);
     shade_sum += weight * lobe_light(around, alpha, retro, false);
 }
+#endif
 
 vec3 shade_lobes(vec3 n, vec3 v, float n_dot_v) {
     vec3 reflectance;
