@@ -209,43 +209,28 @@ fn run_reference(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
         bar.set_length(u64::from(total));
         bar.set_position(u64::from(done));
     };
+    match &stack.surface {
+        None => eprintln!(
+            "tabulating the exact model at {} view cosines…",
+            reference::TABLE_SIZE
+        ),
+        Some(_) => eprintln!(
+            "{} varies over the surface: each pixel's lobes evaluated from its maps with {} \
+             (the model's finest tables, not its exact integrals)",
+            stack.name,
+            reference::evaluated_variant(reference::exact_stand_in(stack.model), layers.len())
+                .short()
+        ),
+    }
     let size = (width, height);
-    let image = match &stack.surface {
-        None => {
-            eprintln!(
-                "tabulating the exact model at {} view cosines…",
-                reference::TABLE_SIZE
-            );
-            reference::render(
-                &mut renderer,
-                stack.model,
-                &layers,
-                size,
-                convergence,
-                &mut progress,
-                stop,
-            )?
-        }
-        Some(surface) => {
-            eprintln!(
-                "{} varies over the surface: each pixel's lobes evaluated from its maps with {} \
-                 (the model's finest tables, not its exact integrals)",
-                stack.name,
-                reference::evaluated_variant(reference::exact_stand_in(stack.model), layers.len())
-                    .short()
-            );
-            reference::render_evaluated(
-                &mut renderer,
-                reference::exact_stand_in(stack.model),
-                &layers,
-                Some(surface),
-                size,
-                convergence,
-                &mut progress,
-                stop,
-            )?
-        }
-    };
+    let image = reference::render_stack(
+        &mut renderer,
+        &stack,
+        size,
+        convergence,
+        &mut progress,
+        stop,
+    )?;
     let Some(image) = image else {
         bar.abandon();
         anyhow::bail!("interrupted; nothing was written");

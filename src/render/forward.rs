@@ -29,6 +29,18 @@ pub struct Draw {
     pub stencil: Option<(u32, u32, u32)>,
 }
 
+/// The shader defines of `key`'s pass: its variant's, and a reference pass's.
+fn defines_of(key: &PassKey) -> Vec<(&'static str, &'static str)> {
+    let mut defines = key.variant.defines();
+    if key.is_reference() {
+        defines.push(("LAMINA_REFERENCE", "1"));
+    }
+    if key.material == MaterialKey::Evaluated {
+        defines.push(("LAMINA_REFERENCE_EVALUATED", "1"));
+    }
+    defines
+}
+
 pub struct ForwardPass {
     /// What the pass was built for; its specialization constants come from it.
     pub key: PassKey,
@@ -80,13 +92,7 @@ impl ForwardPass {
                 shape
             }
         });
-        let mut defines = variant.defines();
-        if reference {
-            defines.push(("LAMINA_REFERENCE", "1"));
-        }
-        if key.material == MaterialKey::Evaluated {
-            defines.push(("LAMINA_REFERENCE_EVALUATED", "1"));
-        }
+        let defines = defines_of(&key);
         let builder = Builder {
             gpu,
             layout,

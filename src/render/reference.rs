@@ -25,7 +25,7 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
-use crate::material::Surface;
+use crate::material::{Stack, Surface};
 use crate::model::fgd::ExactFgd;
 use crate::model::light::{lobe_albedo, MIN_ALPHA};
 use crate::model::oracle::evaluate_model;
@@ -438,7 +438,7 @@ fn render_table(
 /// stack that varies over the surface, [`render_evaluated`]): the model's tables at their
 /// finest — the TIR table in 32-bit floats, the full 4-D FGD table — in single precision.
 /// How far its references lie from the exact model's is measured on the uniform presets
-/// (`cargo test --test suite reference_image::`, profiling/README.md "Image-based lighting").
+/// (`cargo test --test suite reference_maps::`, profiling/README.md "Image-based lighting").
 pub fn exact_stand_in(model: Model) -> VariantKey {
     VariantKey {
         model,
@@ -489,6 +489,40 @@ pub fn render_evaluated(
     renderer.set_surface(surface)?;
     let pass = renderer.prepare_evaluated_reference(variant, layers, surface.map(|s| &**s))?;
     accumulate(renderer, &pass, layers, size, convergence, progress, stop)
+}
+
+/// The exact model's reference image of `stack`: [`render`]'s where it is uniform, and where
+/// it varies over the surface [`render_evaluated`]'s with [`exact_stand_in`].
+pub fn render_stack(
+    renderer: &mut Renderer<'_>,
+    stack: &Stack,
+    size: (u32, u32),
+    convergence: Convergence,
+    progress: &mut dyn FnMut(u32, u32),
+    stop: &AtomicBool,
+) -> Result<Option<ReferenceImage>> {
+    let layers = stack.params();
+    match &stack.surface {
+        None => render(
+            renderer,
+            stack.model,
+            &layers,
+            size,
+            convergence,
+            progress,
+            stop,
+        ),
+        Some(surface) => render_evaluated(
+            renderer,
+            exact_stand_in(stack.model),
+            &layers,
+            Some(surface),
+            size,
+            convergence,
+            progress,
+            stop,
+        ),
+    }
 }
 
 /// Renders `pass`'s frames of `layers` until `convergence` holds and averages them.
