@@ -56,6 +56,19 @@ def main():
         rd.ShutdownReplay()
 
 
+def bound_at(controller, action, names):
+    """The pipeline's name bound at `action`, and for a draw its fragment shader's entry point
+    and specialization ids, copied out so that nothing of the replay's state outlives its
+    event (RenderDoc's pipeline state lives in the replay)."""
+    controller.SetFrameEvent(action.eventId, True)
+    state = controller.GetVulkanPipelineState()
+    if action.flags & rd.ActionFlags.Dispatch:
+        return names.get(state.compute.pipelineResourceId, "?"), None
+    pipeline = names.get(state.graphics.pipelineResourceId, "?")
+    shader = state.fragmentShader
+    return pipeline, (str(shader.entryPoint), [int(i) for i in shader.specializationIds])
+
+
 def summarise(controller, args):
     structured = controller.GetStructuredFile()
     names = {r.resourceId: r.name for r in controller.GetResources()}
@@ -70,18 +83,12 @@ def summarise(controller, args):
             if action.children:
                 print(f"{'  ' * depth}{name}")
             continue
-        controller.SetFrameEvent(action.eventId, True)
-        state = controller.GetVulkanPipelineState()
-        if action.flags & rd.ActionFlags.Dispatch:
-            pipeline = names.get(state.compute.pipelineResourceId, "?")
-        else:
-            pipeline = names.get(state.graphics.pipelineResourceId, "?")
+        pipeline, fragment = bound_at(controller, action, names)
         print(f"{'  ' * depth}{name} (event {action.eventId}): pipeline `{pipeline}`")
-        if action.flags & rd.ActionFlags.Drawcall:
-            shader = state.fragmentShader
-            constants = list(shader.specializationIds)
+        if fragment is not None:
+            entry, constants = fragment
             print(
-                f"{'  ' * (depth + 1)}fragment shader `{shader.entryPoint}`, "
+                f"{'  ' * (depth + 1)}fragment shader `{entry}`, "
                 f"{len(constants)} specialization constants"
             )
             if region == "shaded" and pipeline == args.expect_pipeline and constants:
