@@ -1,7 +1,9 @@
 //! `lamina sweep`: a study file or a suite (`lamina::study`) — its cases listed, run
 //! interleaved, written as results, charts and a report.
 
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
@@ -83,7 +85,7 @@ pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
         None
     };
     let started = std::time::Instant::now();
-    let mut bar: Option<ProgressBar> = None;
+    let mut bar = Follow::new();
     let written = run_suite(
         &SuiteRun {
             gpu: &gpu,
@@ -107,9 +109,66 @@ pub fn run(global: &GlobalArgs, args: &SweepArgs) -> Result<()> {
     Ok(())
 }
 
-/// Prints what the suite's run does: a progress bar per phase, a line per phase done, each
-/// study's table once written.
-fn show(event: Event<'_>, bar: &mut Option<ProgressBar>) {
+/// How far the running phase is: a progress bar on a terminal; elsewhere (a CI log, a batch
+/// job's file) a line on stderr when a step begins and at most every [`PLAIN_EVERY`] within
+/// it, so a long phase never runs silent.
+struct Follow {
+    bar: Option<ProgressBar>,
+    plain: bool,
+    /// The phase's name, and the step and time of the last line printed.
+    phase: String,
+    last: Option<(String, Instant)>,
+}
+
+/// How often a plain progress line repeats within one step.
+const PLAIN_EVERY: Duration = Duration::from_secs(60);
+
+impl Follow {
+    fn new() -> Self {
+        Self {
+            bar: None,
+            plain: !std::io::stderr().is_terminal(),
+            phase: String::new(),
+            last: None,
+        }
+    }
+
+    fn begin(&mut self, phase: String) {
+        self.bar = Some(progress_bar(&phase));
+        self.phase = phase;
+        self.last = None;
+    }
+
+    fn finish(&mut self) {
+        if let Some(bar) = self.bar.take() {
+            bar.finish_and_clear();
+        }
+    }
+
+    fn progress(&mut self, what: &str, done: usize, total: usize) {
+        if let Some(bar) = &self.bar {
+            bar.set_message(what.to_owned());
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        }
+        if !self.plain {
+            return;
+        }
+        let due = match &self.last {
+            Some((step, at)) => step != what || at.elapsed() >= PLAIN_EVERY,
+            None => true,
+        };
+        if due {
+            let took = self.bar.as_ref().map_or(0, |b| b.elapsed().as_secs());
+            eprintln!("  {}: {what} {done}/{total} ({took} s)", self.phase);
+            self.last = Some((what.to_owned(), Instant::now()));
+        }
+    }
+}
+
+/// Prints what the suite's run does: its progress per phase ([`Follow`]), a line per phase
+/// done, each study's table once written.
+fn show(event: Event<'_>, bar: &mut Follow) {
     match event {
         Event::Prebuilt(Ok(took)) => println!(
             "  built or loaded the tables on every core in {:.1} s",
@@ -122,32 +181,15 @@ fn show(event: Event<'_>, bar: &mut Option<ProgressBar>) {
             index,
             count,
             study,
-        } => {
-            *bar = Some(progress_bar(&format!(
-                "[{}/{}] {}",
-                index + 1,
-                count,
-                study.name
-            )))
-        }
-        Event::Progress { what, done, total } => {
-            if let Some(bar) = bar {
-                bar.set_message(what.to_owned());
-                bar.set_length(total as u64);
-                bar.set_position(done as u64);
-            }
-        }
+        } => bar.begin(format!("[{}/{}] {}", index + 1, count, study.name)),
+        Event::Progress { what, done, total } => bar.progress(what, done, total),
         Event::Timed { study, took } => {
-            if let Some(bar) = bar.take() {
-                bar.finish_and_clear();
-            }
+            bar.finish();
             println!("  timed {} in {:.1} s", study.name, took.as_secs_f64());
         }
-        Event::Counting => *bar = Some(progress_bar("instructions (callgrind)")),
+        Event::Counting => bar.begin("instructions (callgrind)".to_owned()),
         Event::Counted { took } => {
-            if let Some(bar) = bar.take() {
-                bar.finish_and_clear();
-            }
+            bar.finish();
             println!(
                 "  counted instructions in {:.1} s (begun beside the timing)",
                 took.as_secs_f64()
