@@ -295,13 +295,7 @@ impl<'g> Renderer<'g> {
         layers: &[LayerParams],
         table: BakedTable,
     ) -> Result<ForwardPass> {
-        if self.target != TargetFormat::Float {
-            return Err(Error::Unsupported(
-                "a reference pass averages frames finer than a half float: render it into a \
-                 float target (TargetFormat::Float)"
-                    .into(),
-            ));
-        }
+        self.require_float_target()?;
         let key = PassKey::reference(model, layers, &self.lighting);
         self.inputs.prepare(key.variant)?;
         let texture = table.upload(self.gpu, "reference lobes")?;
@@ -316,6 +310,14 @@ impl<'g> Renderer<'g> {
         layers: &[LayerParams],
         surface: Option<&Surface>,
     ) -> Result<ForwardPass> {
+        self.require_float_target()?;
+        let key = PassKey::evaluated_reference(variant, layers, surface, &self.lighting);
+        self.inputs.prepare(variant)?;
+        self.pass(key, None)
+    }
+
+    /// Errs unless frames render into a float target, which a reference pass needs.
+    fn require_float_target(&self) -> Result<()> {
         if self.target != TargetFormat::Float {
             return Err(Error::Unsupported(
                 "a reference pass averages frames finer than a half float: render it into a \
@@ -323,9 +325,7 @@ impl<'g> Renderer<'g> {
                     .into(),
             ));
         }
-        let key = PassKey::evaluated_reference(variant, layers, surface, &self.lighting);
-        self.inputs.prepare(variant)?;
-        self.pass(key, None)
+        Ok(())
     }
 
     fn pass(&self, key: PassKey, baked: Option<(BakedTable, BakedTexture)>) -> Result<ForwardPass> {
