@@ -233,6 +233,11 @@ axis!(
         /// through the lobe's visible normals, each read from the matched cube at the mip
         /// whose blur covers its share of the lobe, weighted G2/G1.
         Taps = "taps",
+        /// Two fetches of the matched cube, the lobe matched in its first and second moments
+        /// (`tables::lobe_moments`): placed symmetrically about its mean direction along its
+        /// major axis, each blurred as much as the lobe spreads across that axis. A grazing
+        /// lobe, narrower across the plane of incidence than along it, keeps that shape.
+        Anisotropic = "anisotropic",
     }
 );
 

@@ -44,12 +44,26 @@ vec3 ibl_dominant_direction(vec3 n, vec3 r, float alpha) {
     return mix(n, r, f);
 }
 
-// A lobe's first moment from tables::lobe_moments (`table`, n×n vertex-centred texels over
-// √μ and √α): x, the weight w with which normalize(mix(R, N, w)) is the mean of its reflected
-// directions; y, √α′ of the normal-view lobe that spreads as much.
-vec2 ibl_lobe_moments(sampler2D table, float n_dot_v, float alpha) {
+// A lobe's moments from tables::lobe_moments (`table`: over √μ and √α, n×n vertex-centred
+// texels in each half of a 2n × n image). The left half: x, the weight w with which
+// normalize(mix(R, N, w)) is the mean m̂ of its reflected directions; y, √α′ of the normal-view
+// lobe that spreads as much; z, √α″ of the normal-view lobe that spreads as much across one
+// tangent axis as the lobe across its plane of incidence; w, `up`. The right half's x:
+// `down`. Two points at m̂ + up·t and m̂ − down·t (t: m̂'s tangent in the plane of incidence,
+// towards the normal), weighted down/(up + down) and up/(up + down), hold the rest of the
+// lobe's spread and its skew along t.
+vec2 ibl_lobe_moments_at(float n_dot_v, float alpha) {
     vec2 at = vec2(sqrt(clamp(n_dot_v, 0.0, 1.0)), sqrt(clamp(alpha, 0.0, 1.0)));
-    return textureLod(table, (at * (LOBE_MOMENTS_SIZE - 1.0) + 0.5) / LOBE_MOMENTS_SIZE, 0.0).xy;
+    vec2 texels = vec2(2.0 * LOBE_MOMENTS_SIZE, LOBE_MOMENTS_SIZE);
+    return (at * (LOBE_MOMENTS_SIZE - 1.0) + 0.5) / texels;
+}
+
+vec4 ibl_lobe_moments(sampler2D table, float n_dot_v, float alpha) {
+    return textureLod(table, ibl_lobe_moments_at(n_dot_v, alpha), 0.0);
+}
+
+float ibl_lobe_moments_down(sampler2D table, float n_dot_v, float alpha) {
+    return textureLod(table, ibl_lobe_moments_at(n_dot_v, alpha) + vec2(0.5, 0.0), 0.0).x;
 }
 
 // The irradiance E(n) of an environment given by its order-2 spherical-harmonic coefficients,

@@ -28,7 +28,8 @@ vec3 shade_behind(vec3 n, vec3 d) {
 // One fetch of the environment for a lobe of roughness α around `r` (`behind`: mirrored):
 // `ibl=split-sum`, Karis's cube along Lagarde's dominant direction at the lobe's own mip; the
 // others, the matched cube along the lobe's mean direction at the mip of its spread
-// (lib/ibl.glsl's ibl_lobe_moments). A mirror lobe reads mip 0 along `r` either way.
+// (lib/ibl.glsl's ibl_lobe_moments), `ibl=anisotropic` in two fetches that match its second
+// moments too. A mirror lobe reads mip 0 along `r` either way.
 vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
     vec3 dir;
     float mip;
@@ -39,8 +40,23 @@ vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
         dir = ibl_dominant_direction(n, r, alpha);
         mip = ibl_mip_of_alpha(alpha, frame.params.x);
     } else {
-        vec2 moments = ibl_lobe_moments(lobe_moments, dot(n, r), alpha);
+        vec4 moments = ibl_lobe_moments(lobe_moments, dot(n, r), alpha);
         dir = mix(r, n, moments.x);
+        vec3 across = cross(n, r);
+        if (IBL == IBL_ANISOTROPIC && dot(across, across) > 1e-8) {
+            // Two points along the tangent t of the mean direction in the plane of incidence
+            // (towards the normal), each fetch blurred as the lobe spreads across the plane.
+            vec3 m = normalize(dir);
+            vec3 t = cross(m, normalize(across));
+            float up = moments.w;
+            float down = ibl_lobe_moments_down(lobe_moments, dot(n, r), alpha);
+            float q = down / max(up + down, 1e-6);
+            vec3 d0 = behind ? shade_behind(n, m + up * t) : m + up * t;
+            vec3 d1 = behind ? shade_behind(n, m - down * t) : m - down * t;
+            float minor = ibl_mip_of_alpha(moments.z * moments.z, frame.params.x);
+            return q * textureLod(matched, d0, minor).rgb
+                + (1.0 - q) * textureLod(matched, d1, minor).rgb;
+        }
         mip = ibl_mip_of_alpha(moments.y * moments.y, frame.params.x);
     }
     dir = behind ? shade_behind(n, dir) : dir;

@@ -45,7 +45,7 @@ layout(constant_id = 21) const uint TRANSPORT = 0;
 // 1: the stack may end in a dielectric (neither a conductor nor a diffuse base) and transmits:
 // the forward pass shades what it transmits from behind the surface; 0 folds that code away.
 layout(constant_id = 22) const uint TRANSMITS = 0;
-// IBL_SPLIT_SUM, IBL_MATCHED or IBL_TAPS: how the environment lights each lobe
+// IBL_SPLIT_SUM, IBL_MATCHED, IBL_TAPS or IBL_ANISOTROPIC: how the environment lights each lobe
 // (lib/ibl.glsl, forward.frag.glsl's lobe_radiance).
 layout(constant_id = 23) const uint IBL = 0;
 // A varying stack under a per-material mode (SURFACE_MAPS and SPECIALIZED): the pipeline
