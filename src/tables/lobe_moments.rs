@@ -199,15 +199,12 @@ fn mix_weight(theta: f64, lean: f64) -> f64 {
     (t / (theta.sin() + t * (1.0 - theta.cos()))).clamp(0.0, 1.0)
 }
 
-/// The resultant length of the normal-view lobe of roughness α: the mean cosine of its
-/// reflected directions to N, weighted by G2/G1 = 1/(1 + Λ(l)). Visible normals at a normal
-/// view are D(h)·cos θ_h, whose CDF in u gives tan²θ_h = α²u/(1 − u); l makes 2θ_h with N and
-/// falls below the horizon past θ_h = π/4, u = 1/(1 + α²). A midpoint rule in u over [0, that]
-/// is smooth in α, where the 2-D grid's cut at the horizon moves in steps.
-pub fn normal_view_spread(alpha: f64) -> f64 {
-    if alpha <= 0.0 {
-        return 1.0;
-    }
+/// The mean of `f(cos θ_l)` over the normal-view lobe of roughness α > 0's reflected
+/// directions, weighted by G2/G1 = 1/(1 + Λ(l)). Visible normals at a normal view are
+/// D(h)·cos θ_h, whose CDF in u gives tan²θ_h = α²u/(1 − u); l makes 2θ_h with N and falls below
+/// the horizon past θ_h = π/4, u = 1/(1 + α²). A midpoint rule in u over [0, that] is smooth in
+/// α, where the 2-D grid's cut at the horizon moves in steps.
+fn normal_view_mean(alpha: f64, f: impl Fn(f64) -> f64) -> f64 {
     let a2 = alpha * alpha;
     let end = 1.0 / (1.0 + a2);
     let (mut sum, mut total) = (0.0, 0.0);
@@ -216,30 +213,28 @@ pub fn normal_view_spread(alpha: f64) -> f64 {
         let tan2 = a2 * u / (1.0 - u);
         let cos_l = (1.0 - tan2) / (1.0 + tan2);
         let w = 1.0 / (1.0 + smith_lambda(cos_l, alpha));
-        sum += w * cos_l;
+        sum += w * f(cos_l);
         total += w;
     }
     sum / total
 }
 
+/// The resultant length of the normal-view lobe of roughness α: the mean cosine of its
+/// reflected directions to N ([`normal_view_mean`]).
+pub fn normal_view_spread(alpha: f64) -> f64 {
+    if alpha <= 0.0 {
+        return 1.0;
+    }
+    normal_view_mean(alpha, |cos_l| cos_l)
+}
+
 /// The mean square of one tangent component of the normal-view lobe of roughness α's
-/// reflected directions, (1 − cos²θ_l)/2 averaged as [`normal_view_spread`] averages cos θ_l.
+/// reflected directions: (1 − cos²θ_l)/2 averaged ([`normal_view_mean`]).
 pub fn normal_view_variance(alpha: f64) -> f64 {
     if alpha <= 0.0 {
         return 0.0;
     }
-    let a2 = alpha * alpha;
-    let end = 1.0 / (1.0 + a2);
-    let (mut sum, mut total) = (0.0, 0.0);
-    for k in 0..SPREAD_POINTS {
-        let u = end * (f64::from(k) + 0.5) / f64::from(SPREAD_POINTS);
-        let tan2 = a2 * u / (1.0 - u);
-        let cos_l = (1.0 - tan2) / (1.0 + tan2);
-        let w = 1.0 / (1.0 + smith_lambda(cos_l, alpha));
-        sum += w * 0.5 * (1.0 - cos_l * cos_l);
-        total += w;
-    }
-    sum / total
+    normal_view_mean(alpha, |cos_l| 0.5 * (1.0 - cos_l * cos_l))
 }
 
 /// √α whose normal-view lobe's tangent component has mean square `c`, read from `variance`
@@ -274,12 +269,12 @@ fn matched_root_alpha(spread: &[f64], c: f64) -> f64 {
     1.0
 }
 
-/// [`normal_view_spread`] at √α uniform on [0, 1].
-fn spread_samples() -> Vec<f64> {
+/// `statistic` (of α) at √α uniform on [0, 1].
+fn samples(statistic: fn(f64) -> f64) -> Vec<f64> {
     (0..SPREAD_SAMPLES)
         .map(|k| {
             let r = k as f64 / (SPREAD_SAMPLES - 1) as f64;
-            normal_view_spread(r * r)
+            statistic(r * r)
         })
         .collect()
 }
@@ -288,13 +283,8 @@ fn spread_samples() -> Vec<f64> {
 /// cores.
 fn compute(size: u32) -> Vec<f32> {
     use rayon::prelude::*;
-    let spread = spread_samples();
-    let variance: Vec<f64> = (0..SPREAD_SAMPLES)
-        .map(|k| {
-            let r = k as f64 / (SPREAD_SAMPLES - 1) as f64;
-            normal_view_variance(r * r)
-        })
-        .collect();
+    let spread = samples(normal_view_spread);
+    let variance = samples(normal_view_variance);
     (0..size * size)
         .into_par_iter()
         .flat_map_iter(|t| {
@@ -323,7 +313,7 @@ mod tests {
 
     #[test]
     fn a_normal_view_keeps_the_mirror_direction_and_its_own_roughness() {
-        let spread = spread_samples();
+        let spread = samples(normal_view_spread);
         assert!(spread.windows(2).all(|p| p[1] < p[0]), "{spread:?}");
         // The 2-D rule's length at a normal view inverts to the α it was taken at.
         for alpha in [0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0] {
@@ -336,9 +326,7 @@ mod tests {
 
     #[test]
     fn the_second_moments_at_a_normal_view_are_the_lobes_own() {
-        let variance: Vec<f64> = (0..SPREAD_SAMPLES)
-            .map(|k| normal_view_variance((k as f64 / (SPREAD_SAMPLES - 1) as f64).powi(2)))
-            .collect();
+        let variance = samples(normal_view_variance);
         assert!(variance.windows(2).all(|p| p[1] > p[0]));
         for alpha in [0.02, 0.05, 0.1, 0.2, 0.5] {
             let (_, [along, across, _]) = lobe_moments(1.0, alpha);
