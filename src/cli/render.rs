@@ -12,6 +12,7 @@ use lamina::render::reference;
 use lamina::render::scene::Scene;
 use lamina::render::{PassKey, Renderer, TargetFormat};
 use lamina::tables::environment::EnvDesc;
+use lamina::variant::{Axis, Interfaces};
 
 use super::args::{self, SceneArgs, SceneDefaults};
 use super::{
@@ -56,6 +57,13 @@ pub struct RenderArgs {
     /// estimates of the same image, whose difference is its noise.
     #[arg(long, value_name = "SEED", default_value_t = 0, requires = "reference")]
     seed: u64,
+    /// With --reference: the truth in this interface mode of the reference walk (`single`:
+    /// microfacet interfaces that lose what masking removes; `multiple`: the microsurface
+    /// walk, which conserves it) — the exact model's lobes with each layer's energy from the
+    /// transport that follows light's angles, as `transport=corrected,interfaces=MODE`
+    /// computes it. Without it: the paper's transport, the talk's model.
+    #[arg(long, value_name = "MODE", requires = "reference")]
+    interfaces: Option<String>,
     /// Record the measured frame (the sky and the shaded draw) with RenderDoc into this file,
     /// for RenderDoc's UI, renderdoccmd or its Python module; needs RenderDoc's library
     /// (Debian: librenderdoc). Written whatever the image's checks find: a failing frame is
@@ -185,6 +193,7 @@ fn run_reference(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
         seed: args.seed,
     };
     convergence.check()?;
+    let truth = truth(args)?;
     let env_path = asset_path(&scene.env);
     let equirect = imageio::read_exr(&env_path).context("reading the environment map")?;
     let stack = Stack::resolve(&scene.material)?;
@@ -218,14 +227,18 @@ fn run_reference(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
             "{} varies over the surface: each pixel's lobes evaluated from its maps with {} \
              (the model's finest tables, not its exact integrals)",
             stack.name,
-            reference::evaluated_variant(reference::exact_stand_in(stack.model), layers.len())
-                .short()
+            reference::evaluated_variant(
+                reference::exact_stand_in(stack.model, truth),
+                layers.len()
+            )
+            .short()
         ),
     }
     let size = (width, height);
     let image = reference::render_stack(
         &mut renderer,
         &stack,
+        truth,
         size,
         convergence,
         &mut progress,
@@ -240,8 +253,18 @@ fn run_reference(global: &GlobalArgs, args: &RenderArgs) -> Result<()> {
     let (w, h) = (image.width as usize, image.height as usize);
     imageio::write_exr_rgba32f(&args.out, w, h, &image.pixels)?;
     imageio::write_png_tonemapped(&args.png, w, h, &image.pixels, args.exposure)?;
-    print_reference(&gpu, &env_path, &stack, &image, args);
+    print_reference(&gpu, &env_path, &stack, &image, truth, args);
     Ok(())
+}
+
+/// The truth `--interfaces` names: the paper's transport without it.
+fn truth(args: &RenderArgs) -> Result<reference::Truth> {
+    Ok(match &args.interfaces {
+        None => reference::Truth::Paper,
+        Some(mode) => {
+            reference::Truth::Transport(Interfaces::parse_value(mode).context("--interfaces")?)
+        }
+    })
 }
 
 /// What `--reference` rendered and wrote.
@@ -250,6 +273,7 @@ fn print_reference(
     env_path: &std::path::Path,
     stack: &Stack,
     image: &reference::ReferenceImage,
+    truth: reference::Truth,
     args: &RenderArgs,
 ) {
     let (width, height) = (image.width, image.height);
@@ -264,6 +288,7 @@ fn print_reference(
         stack.model,
         stack.layers.len()
     );
+    println!("truth:       {truth}");
     println!(
         "size:        {width}x{height}\nreference:   {} samples per lobe and pixel from seed {}, \
          relative noise {:.2e}",

@@ -13,7 +13,7 @@ use crate::imageio::{tonemap, HdrImage};
 use crate::material::Surface;
 use crate::model::LayerParams;
 use crate::render::lights::Lighting;
-use crate::render::reference::{self, Convergence, ReferenceImage};
+use crate::render::reference::{self, Convergence, ReferenceImage, Truth};
 use crate::render::scene::Scene;
 use crate::render::{PassCache, Renderer, TargetFormat};
 use crate::tables::environment::EnvDesc;
@@ -89,7 +89,8 @@ pub fn compare(
 }
 
 /// Renders each uniform material's reference image (`config`'s scene, size and lighting, `spp`
-/// samples per lobe, from `seed`) and one frame of each case of `config`'s plan, in float
+/// samples per lobe, from `seed`; the exact model's under the truth of each case's transport,
+/// `reference::Truth::of`) and one frame of each case of `config`'s plan, in float
 /// targets, and measures each case's image error — beside the reference's noise floor, the
 /// FLIP between it and the same reference from the next seed, and in two parts: lighting,
 /// against the reference of the case's own lobes ([`reference_image`]), and model, that reference
@@ -127,6 +128,7 @@ pub fn measure(
             scene: config.scene,
             size: (width, height),
             lighting: config.lighting.clone(),
+            truth: Truth::of(case.variant),
             spp,
             seed,
         };
@@ -208,7 +210,17 @@ fn reference_image(
     match (own, &key.surface) {
         (None, None) => {
             renderer.set_surface(None)?;
-            reference::render(renderer, key.model, layers, size, convergence, quiet, never)
+            let (model, truth) = (key.model, key.truth);
+            reference::render(
+                renderer,
+                model,
+                layers,
+                truth,
+                size,
+                convergence,
+                quiet,
+                never,
+            )
         }
         (Some(variant), None) => {
             renderer.set_surface(None)?;
@@ -216,7 +228,7 @@ fn reference_image(
         }
         (own, Some(surface)) => reference::render_evaluated(
             renderer,
-            own.unwrap_or_else(|| reference::exact_stand_in(key.model)),
+            own.unwrap_or_else(|| reference::exact_stand_in(key.model, key.truth)),
             layers,
             Some(surface),
             size,
@@ -229,7 +241,8 @@ fn reference_image(
 }
 
 /// What a reference image depends on, under one environment: the stack in its model (and
-/// its maps), the scene and size, the lighting, the samples and their seed.
+/// its maps), the scene and size, the lighting, the truth the case's transport is measured
+/// against, the samples and their seed.
 #[derive(Clone, PartialEq)]
 struct ReferenceKey {
     model: Model,
@@ -238,6 +251,7 @@ struct ReferenceKey {
     scene: Scene,
     size: (u32, u32),
     lighting: Lighting,
+    truth: Truth,
     spp: u32,
     seed: u64,
 }

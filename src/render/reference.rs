@@ -17,6 +17,12 @@
 //! cosine holds: its references evaluate each pixel's lobes in the pass from its maps, with a
 //! variant's shader library ([`render_evaluated`]), and integrate them alike. The exact model's
 //! is then stood in for by its finest tables ([`exact_stand_in`]).
+//!
+//! Which model is exact is the image's [`Truth`]: the paper's transport (the talk's shader's
+//! model), or the stack's energies from the transport that follows light's angles in one of the
+//! reference walk's interface modes (`transport=corrected`'s, from the exact model: within 1.4 %
+//! of the walk's R, the lobes' shapes the paper's). A variant's image is measured against the
+//! truth of its own transport and interfaces ([`Truth::of`]).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -29,12 +35,15 @@ use crate::material::{Stack, Surface};
 use crate::model::fgd::ExactFgd;
 use crate::model::light::{lobe_albedo, MIN_ALPHA};
 use crate::model::oracle::evaluate_model;
+use crate::model::transport::Correction;
 use crate::model::Fgd;
 use crate::model::{ends_transmissive, Evaluation, LayerParams, Lobe};
 use crate::reference::compare::ExactTir;
 use crate::shader::specialize::{BakedShape, MAX_BAKED_LOBES};
 use crate::tables::split_sum::SplitSumTable;
-use crate::variant::{self, Classify, Ibl, Mode, Model, ShadePath, Tir, VariantKey, G2};
+use crate::variant::{
+    self, Classify, Ibl, Interfaces, Mode, Model, ShadePath, Tir, Transport, VariantKey, G2,
+};
 
 use super::baked::{sample_cos, BakedTable};
 use super::eval::GpuEvaluator;
@@ -57,16 +66,73 @@ pub const MAX_SPP: u32 = 1 << 20;
 /// Grid side of the exact FGD integral at each tabulated cosine.
 const FGD_GRID: u32 = 256;
 
-/// The exact model's lobes over the view cosine, as the reference pass reads them
-/// ([`table_of`]).
-pub fn lobe_table(model: Model, layers: &[LayerParams]) -> Result<BakedTable> {
+/// Which model a reference image holds exact.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Truth {
+    /// The paper's transport: the model the talk's shader computes, with its FGD and TIR
+    /// correction integrated exactly.
+    #[default]
+    Paper,
+    /// Each layer's energy from the discrete-ordinates transport of the walk's interfaces in
+    /// this mode (`model::transport`'s ratios, the paper's side exact), the lobes' shapes the
+    /// paper's: the reference study's truth as near as lobes hold it.
+    Transport(Interfaces),
+}
+
+impl Truth {
+    /// The truth a variant's image is measured against: that of its own transport, in its
+    /// interface mode.
+    pub fn of(variant: VariantKey) -> Self {
+        match variant.transport {
+            Transport::Paper => Truth::Paper,
+            Transport::Corrected => Truth::Transport(variant.interfaces),
+        }
+    }
+
+    /// The transport and interfaces axes of a variant that computes this truth's lobes.
+    fn axes(self, variant: VariantKey) -> VariantKey {
+        let (transport, interfaces) = match self {
+            Truth::Paper => (Transport::Paper, Interfaces::Single),
+            Truth::Transport(mode) => (Transport::Corrected, mode),
+        };
+        VariantKey {
+            transport,
+            interfaces,
+            ..variant
+        }
+    }
+}
+
+impl std::fmt::Display for Truth {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Truth::Paper => f.write_str("the paper's transport"),
+            Truth::Transport(mode) => write!(f, "the corrected transport, interfaces={mode}"),
+        }
+    }
+}
+
+/// The exact model's lobes over the view cosine under `truth`, as the reference pass reads
+/// them ([`table_of`]).
+pub fn lobe_table(model: Model, layers: &[LayerParams], truth: Truth) -> Result<BakedTable> {
     let fgd = ExactFgd {
         g2: G2_FORM,
         resolution: FGD_GRID,
     };
+    let correction = match truth {
+        Truth::Paper => None,
+        Truth::Transport(mode) => Some(Correction::new(layers, model, mode, &fgd, &ExactTir)),
+    };
     let evaluations: Vec<_> = (0..TABLE_SIZE)
         .into_par_iter()
-        .map(|j| evaluate_model(model, layers, sample_cos(j, TABLE_SIZE), &fgd, &ExactTir))
+        .map(|j| {
+            let mu = sample_cos(j, TABLE_SIZE);
+            let mut e = evaluate_model(model, layers, mu, &fgd, &ExactTir);
+            if let Some(c) = &correction {
+                c.apply(&mut e, mu);
+            }
+            e
+        })
         .collect();
     table_of(&evaluations, layers)
 }
@@ -353,13 +419,15 @@ impl Accumulator {
     }
 }
 
-/// Renders the reference image of the uniform stack `layers` in `model` with `renderer`'s
-/// scene, environment and lights (`renderer` must render into a float target). `progress(frame,
-/// frames)` follows the frames; `None` when `stop` was set.
+/// Renders the reference image of the uniform stack `layers` in `model` under `truth` with
+/// `renderer`'s scene, environment and lights (`renderer` must render into a float target).
+/// `progress(frame, frames)` follows the frames; `None` when `stop` was set.
+#[allow(clippy::too_many_arguments)]
 pub fn render(
     renderer: &mut Renderer<'_>,
     model: Model,
     layers: &[LayerParams],
+    truth: Truth,
     (width, height): (u32, u32),
     convergence: Convergence,
     progress: &mut dyn FnMut(u32, u32),
@@ -373,7 +441,7 @@ pub fn render(
                 .into(),
         ));
     }
-    let table = lobe_table(model, layers)?;
+    let table = lobe_table(model, layers, truth)?;
     render_table(
         renderer,
         model,
@@ -434,18 +502,20 @@ fn render_table(
     accumulate(renderer, &pass, layers, size, convergence, progress, stop)
 }
 
-/// The variant whose lobes stand for the exact model's where they cannot be tabulated (a
-/// stack that varies over the surface, [`render_evaluated`]): the model's tables at their
-/// finest — the TIR table in 32-bit floats, the full 4-D FGD table — in single precision.
-/// How far its references lie from the exact model's is measured on the uniform presets
-/// (`cargo test --test suite reference_maps::`, profiling/README.md "Image-based lighting").
-pub fn exact_stand_in(model: Model) -> VariantKey {
-    VariantKey {
+/// The variant whose lobes stand for the exact model's under `truth` where they cannot be
+/// tabulated (a stack that varies over the surface, [`render_evaluated`]): the model's tables
+/// at their finest — the TIR table in 32-bit floats, the full 4-D FGD table — in single
+/// precision, with the truth's transport (whose ratios it takes at the stack's nominal
+/// values, as every variant does). How far its references lie from the exact model's is
+/// measured on the uniform presets (`cargo test --test suite reference_maps::`,
+/// profiling/README.md "Image-based lighting").
+pub fn exact_stand_in(model: Model, truth: Truth) -> VariantKey {
+    truth.axes(VariantKey {
         model,
         tir: Tir::Lut32,
         fgd: variant::Fgd::Full4d,
         ..VariantKey::default()
-    }
+    })
 }
 
 /// The variant an evaluated reference pass of `variant`'s lobes is built with, for a stack of
@@ -491,11 +561,13 @@ pub fn render_evaluated(
     accumulate(renderer, &pass, layers, size, convergence, progress, stop)
 }
 
-/// The exact model's reference image of `stack`: [`render`]'s where it is uniform, and where
-/// it varies over the surface [`render_evaluated`]'s with [`exact_stand_in`].
+/// The exact model's reference image of `stack` under `truth`: [`render`]'s where it is
+/// uniform, and where it varies over the surface [`render_evaluated`]'s with
+/// [`exact_stand_in`].
 pub fn render_stack(
     renderer: &mut Renderer<'_>,
     stack: &Stack,
+    truth: Truth,
     size: (u32, u32),
     convergence: Convergence,
     progress: &mut dyn FnMut(u32, u32),
@@ -507,6 +579,7 @@ pub fn render_stack(
             renderer,
             stack.model,
             &layers,
+            truth,
             size,
             convergence,
             progress,
@@ -514,7 +587,7 @@ pub fn render_stack(
         ),
         Some(surface) => render_evaluated(
             renderer,
-            exact_stand_in(stack.model),
+            exact_stand_in(stack.model, truth),
             &layers,
             Some(surface),
             size,

@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use lamina::imageio::HdrImage;
 use lamina::material::{Stack, Surface};
-use lamina::render::reference::{self, Convergence, ReferenceImage};
+use lamina::render::reference::{self, Convergence, ReferenceImage, Truth};
 use lamina::render::scene::{full_screen, Camera};
 use lamina::render::{PassKey, Renderer, TargetFormat};
 use lamina::tables::environment::EnvDesc;
@@ -187,6 +187,7 @@ fn the_exact_models_stand_in_is_near_the_exact_model() {
             &mut renderer,
             stack.model,
             &layers,
+            Truth::Paper,
             (W, H),
             convergence(64),
             &mut |_, _| {},
@@ -196,7 +197,7 @@ fn the_exact_models_stand_in_is_near_the_exact_model() {
         .unwrap();
         let stand_in = evaluated(
             &mut renderer,
-            reference::exact_stand_in(stack.model),
+            reference::exact_stand_in(stack.model, Truth::Paper),
             &stack,
             None,
             64,

@@ -14,7 +14,7 @@ use crate::common;
 use lamina::imageio::HdrImage;
 use lamina::model::{oracle, LayerParams};
 use lamina::render::furnace;
-use lamina::render::reference::{self, Convergence};
+use lamina::render::reference::{self, Convergence, Truth};
 use lamina::render::renderer::{Renderer, TargetFormat};
 use lamina::tables::environment::EnvDesc;
 use lamina::variant::{Model, VariantKey};
@@ -126,6 +126,7 @@ fn a_smooth_slab_shows_the_environment_behind_it() {
             &mut renderer,
             *model,
             layers,
+            Truth::Paper,
             (size, size),
             Convergence {
                 spp: 32,

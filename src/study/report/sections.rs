@@ -181,8 +181,10 @@ fn image_error_intro(md: &mut String, s: &StudyDir, counted: bool) {
          radiance (`profile::image_error`). The error in two parts, where measured: \
          *lighting*, the run's image against the reference of its own lobes (the lobes the \
          variant computes, integrated exactly: what its image-based lighting and lights \
-         alone cost), and *model*, that reference against the exact model's (what its lobes \
-         alone cost; both references from one seed, so their noise largely cancels). FLIP \
+         alone cost), and *model*, that reference against the exact model's (under the truth \
+         of the run's transport: the paper's, or under `transport=corrected` the energies of \
+         the transport that follows light's angles in the run's `interfaces` mode; what its \
+         lobes alone cost; both references from one seed, so their noise largely cancels). FLIP \
          does not add: each part is the FLIP of its two images, and the whole lies within \
          their sum. Two FLIPs differ significantly when they are at least {} noise floors \
          (the larger of the two runs') apart: the floor is then at most a quarter of any \
