@@ -520,32 +520,33 @@ fn reference_table(md: &mut String, s: &StudyDir, truth: &str) {
         }
     }
     md.push('\n');
-    let lower = slices
-        .0
-        .iter()
-        .zip(&slices.1)
-        .filter(|(p, c)| c < p)
-        .count();
-    let coated = slices.0.len();
-    let median = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v.get(v.len() / 2).copied().unwrap_or(0.0)
-    };
     if let Some((error, material, mu)) = worst {
         let _ = writeln!(
             md,
             "Reading: the paper's total reflectance is within 10 % of this reference at \
              {paper10} of {n} (material, view) points and within 5 % at {paper5}; the \
              corrected model is within 5 % at {corrected5} of {n}, its worst channel within \
-             10 % at {worst10}, its largest error {:+.1} % ({material}, cos θ = {mu:.2}). \
-             Median slice error of the coated stacks: paper {:.2} %, corrected {:.2} % \
-             (corrected lower at {lower} of {coated} points: it scales the paper's lobes and \
-             keeps their shapes).\n",
+             10 % at {worst10}, its largest error {:+.1} % ({material}, cos θ = {mu:.2}). {}\n",
             100.0 * error,
-            100.0 * median(&mut slices.0),
-            100.0 * median(&mut slices.1)
+            slice_reading(slices)
         );
     }
+}
+
+/// The coated stacks' slice errors, the paper's and the corrected model's per point, in words.
+fn slice_reading((mut paper, mut corrected): (Vec<f64>, Vec<f64>)) -> String {
+    let lower = paper.iter().zip(&corrected).filter(|(p, c)| c < p).count();
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(0.0)
+    };
+    format!(
+        "Median slice error of the coated stacks: paper {:.2} %, corrected {:.2} % (corrected \
+         lower at {lower} of {} points: it scales the paper's lobes and keeps their shapes).",
+        100.0 * median(&mut paper),
+        100.0 * median(&mut corrected),
+        paper.len()
+    )
 }
 
 /// The run a published figure's `match` pattern names: the first study point that matches,
