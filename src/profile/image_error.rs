@@ -258,8 +258,8 @@ struct ReferenceKey {
 
 /// The reference images rendered so far under one environment, each with its noise floor,
 /// kept across the measurements of a run: a suite's studies of one material at one size share
-/// its reference, rendered once (it is seeded by its seed and frames, so a second render would
-/// be the same image).
+/// its reference, rendered once per truth (with the next seed's for its floor; it is seeded by
+/// its seed and frames, so a second render would be the same image).
 #[derive(Default)]
 pub struct References {
     images: Vec<(ReferenceKey, ReferenceImage, f64)>,

@@ -102,8 +102,9 @@ pub struct Run {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lighting_error: Option<ImageError>,
     /// The image error's model part: the reference image of the run's own lobes against the
-    /// exact model's (the one [`Run::image_error`] is measured against). What the variant's
-    /// lobes (its tables, precision, TIR mode, transport) alone cost.
+    /// exact model's (the one [`Run::image_error`] is measured against: that of the run's own
+    /// transport, `render::reference::Truth::of`). What the variant's lobes (its tables,
+    /// precision, TIR mode) alone cost.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model_error: Option<ImageError>,
 }

@@ -20,9 +20,12 @@
 //!
 //! Which model is exact is the image's [`Truth`]: the paper's transport (the talk's shader's
 //! model), or the stack's energies from the transport that follows light's angles in one of the
-//! reference walk's interface modes (`transport=corrected`'s, from the exact model: within 1.4 %
-//! of the walk's R, the lobes' shapes the paper's). A variant's image is measured against the
-//! truth of its own transport and interfaces ([`Truth::of`]).
+//! reference walk's interface modes (`transport=corrected`'s, from the exact model: the
+//! transport within 1.4 % of the walk's R, the corrected model, its ratios interpolated between
+//! view cosines, within 2.8 % on the presets; the lobes' shapes the paper's). A variant's image
+//! is measured against the truth of its own transport and interfaces ([`Truth::of`]). A stack
+//! with maps stands in with the finest tables ([`exact_stand_in`]), its ratios taken at its
+//! nominal values as every variant's are.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;

@@ -8,6 +8,7 @@ use std::path::Path;
 use crate::chart::{Chart, Series, XyChart, XySeries};
 use crate::profile::results::{Results, Run};
 use crate::reference::compare::{MaterialReference, ReferenceRow};
+use crate::render::reference::Truth;
 
 use super::meta::{BakeErrorRow, StudyMeta};
 
@@ -40,13 +41,19 @@ pub fn significant_flip(a: &Run, b: &Run) -> f64 {
 /// reference ([`significant_flip`]) than the last one taken before it. A run off the front
 /// has a cheaper run on it that is not resolvably farther from the reference. With no noise
 /// floor measured this is the classic front: no run is at most as costly and at most as
-/// wrong, and better in one.
-pub fn pareto_front(results: &Results, material: &str, instructions: bool) -> Vec<usize> {
+/// wrong, and better in one. Only runs measured against the same reference take part: those
+/// of `material` whose transport holds `truth` exact (`render::reference::Truth::of`).
+pub fn pareto_front(
+    results: &Results,
+    material: &str,
+    truth: Truth,
+    instructions: bool,
+) -> Vec<usize> {
     let mut points: Vec<(usize, f64, f64)> = results
         .runs
         .iter()
         .enumerate()
-        .filter(|(_, r)| r.material == material)
+        .filter(|(_, r)| r.material == material && Truth::of(r.variant) == truth)
         .filter_map(|(i, r)| Some((i, r.image_error?.flip, run_cost(r, instructions)?)))
         .collect();
     points.sort_by(|a, b| a.2.total_cmp(&b.2).then(a.1.total_cmp(&b.1)));
@@ -147,21 +154,33 @@ fn pareto_series(
             });
             colour += 1;
         }
-        let mut front: Vec<(f64, f64)> = pareto_front(results, material, instructions)
-            .into_iter()
-            .filter_map(|i| {
-                let r = &results.runs[i];
-                Some((r.image_error?.flip, run_cost(r, instructions)?))
-            })
-            .collect();
-        front.sort_by(|a, b| a.0.total_cmp(&b.0));
-        series.push(XySeries {
-            label: format!("Pareto front ({material})"),
-            points: front.iter().map(|&(x, y)| (x, y, 0.0, 0.0)).collect(),
-            line: true,
-            colour,
-        });
-        colour += 1;
+        let mut truths: Vec<Truth> = Vec::new();
+        for r in results.runs.iter().filter(|r| r.material == *material) {
+            if r.image_error.is_some() && !truths.contains(&Truth::of(r.variant)) {
+                truths.push(Truth::of(r.variant));
+            }
+        }
+        for truth in truths {
+            let mut front: Vec<(f64, f64)> = pareto_front(results, material, truth, instructions)
+                .into_iter()
+                .filter_map(|i| {
+                    let r = &results.runs[i];
+                    Some((r.image_error?.flip, run_cost(r, instructions)?))
+                })
+                .collect();
+            front.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let label = match truth {
+                Truth::Paper => format!("Pareto front ({material})"),
+                other => format!("Pareto front ({material}, against {other})"),
+            };
+            series.push(XySeries {
+                label,
+                points: front.iter().map(|&(x, y)| (x, y, 0.0, 0.0)).collect(),
+                line: true,
+                colour,
+            });
+            colour += 1;
+        }
     }
     (series, max_flip)
 }

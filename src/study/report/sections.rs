@@ -8,6 +8,7 @@ use std::path::Path;
 use crate::profile::image_error::{error_map_path, fp32_error_map_path};
 use crate::profile::results::{ImageError, Run};
 use crate::reference::compare::{MaterialReference, ReferenceRow};
+use crate::render::reference::Truth;
 use crate::study::charts::{pareto_front, reference_chart_stem, run_label, SIGNIFICANT_FLOORS};
 use crate::study::dirs::StudyDir;
 use crate::study::{Published, Target};
@@ -181,16 +182,19 @@ fn image_error_intro(md: &mut String, s: &StudyDir, counted: bool) {
          radiance (`profile::image_error`). The error in two parts, where measured: \
          *lighting*, the run's image against the reference of its own lobes (the lobes the \
          variant computes, integrated exactly: what its image-based lighting and lights \
-         alone cost), and *model*, that reference against the exact model's (under the truth \
+         alone cost), and *model*, that reference against the exact model's (what its lobes \
+         alone cost; both references from one seed, so their noise largely cancels). The exact \
+         model, against which the whole error, its floor and its map are measured too, is that \
          of the run's transport: the paper's, or under `transport=corrected` the energies of \
-         the transport that follows light's angles in the run's `interfaces` mode; what its \
-         lobes alone cost; both references from one seed, so their noise largely cancels). FLIP \
+         the transport that follows light's angles in the run's `interfaces` mode. FLIP \
          does not add: each part is the FLIP of its two images, and the whole lies within \
          their sum. Two FLIPs differ significantly when they are at least {} noise floors \
          (the larger of the two runs') apart: the floor is then at most a quarter of any \
          difference the report resolves. A run is on the Pareto front when it is \
          significantly closer to the reference than every cheaper run of its material on the \
-         front (cost: {}); a run off it has a cheaper one that is not resolvably farther.\n",
+         front (cost: {}); a run off it has a cheaper one that is not resolvably farther. \
+         Runs of another transport or `interfaces` mode are measured against their own truth \
+         and form their own front.\n",
         SIGNIFICANT_FLOORS,
         if counted {
             "JIT instructions per pixel"
@@ -228,7 +232,7 @@ pub(super) fn image_error_section(md: &mut String, s: &StudyDir, out_dir: &Path)
         } else {
             format!("{:.3}", run.median_ms)
         };
-        let front = pareto_front(r, &run.material, counted).contains(&i);
+        let front = pareto_front(r, &run.material, Truth::of(run.variant), counted).contains(&i);
         if !front {
             dominated.push(format!("{name} ({})", run.material));
         }
@@ -535,6 +539,9 @@ fn reference_table(md: &mut String, s: &StudyDir, truth: &str) {
 
 /// The coated stacks' slice errors, the paper's and the corrected model's per point, in words.
 fn slice_reading((mut paper, mut corrected): (Vec<f64>, Vec<f64>)) -> String {
+    if paper.is_empty() {
+        return String::new();
+    }
     let lower = paper.iter().zip(&corrected).filter(|(p, c)| c < p).count();
     let median = |v: &mut Vec<f64>| {
         v.sort_by(f64::total_cmp);

@@ -8,6 +8,7 @@ use super::runs::{executable_stats_table, FLAG_BIT};
 use super::sections::target_verdict;
 use super::*;
 use crate::profile::results::{CounterInfo, DeviceInfo, Results, Run};
+use crate::render::reference::Truth;
 use crate::render::scene::Scene;
 use crate::study::meta::{BakeErrorRow, MaterialBakeError, PointMeta, StudyMeta};
 use crate::study::{Published, Target};
@@ -640,10 +641,16 @@ fn the_pareto_front_steps_only_by_resolvable_differences() {
         scored("model=tm2,ibl=matched", 2.0, 0.27, Some(0.01)),
         scored("model=tm2,max_layers=8", 3.0, 0.20, Some(0.01)),
     ];
-    assert_eq!(pareto_front(&results, "gold", false), vec![1, 3]);
+    assert_eq!(
+        pareto_front(&results, "gold", Truth::Paper, false),
+        vec![1, 3]
+    );
     // Unmeasured floors: the classic front, every strictly closer dearer run.
     for r in &mut results.runs {
         r.reference_flip_floor = None;
     }
-    assert_eq!(pareto_front(&results, "gold", false), vec![1, 2, 3, 0]);
+    assert_eq!(
+        pareto_front(&results, "gold", Truth::Paper, false),
+        vec![1, 2, 3, 0]
+    );
 }
