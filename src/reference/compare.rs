@@ -5,31 +5,23 @@
 //! The model side is the f64 model itself, as the paper defines it: FGD integrated exactly and
 //! the TIR correction from the exact trapped fraction (the integral the TIR table holds), with
 //! the interfaces' masking the `g2` of the study's variant. Its BRDF is the sum of its lobes as
-//! lamina shades them under a light (`model::light`: each lobe a GGX lobe of its roughness
-//! normalised to its energy, a diffuse base's lobe Lambertian), binned exactly as the
-//! reference bins its paths: each lobe is integrated over its own quadrature
-//! (`light::for_each_lobe_direction`, which follows the lobe however sharp) and each point's
-//! energy lands in the bin of its direction.
+//! lamina shades them under a light, binned exactly as the reference bins its paths
+//! ([`super::slice`]); beside it, the corrected model's slice error with its lobes reshaped as
+//! the walk's are ([`super::slice::Shaping`]), which says how much of that error is shape.
 
 use std::f64::consts::PI;
 use std::sync::atomic::AtomicBool;
 
-use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use super::{simulate, slice_bin, slice_projected_solid_angle, Estimate, Settings, SLICE_BINS};
+use super::slice::{model_slice, shaped_slice, ShapedErrors, Shaping};
+use super::{simulate, slice_projected_solid_angle, Estimate, Settings, SLICE_BINS};
 use crate::error::Result;
 use crate::model::fgd::ExactFgd;
-use crate::model::light::{
-    for_each_lobe_direction, lobe_albedo, lobe_view, unnormalised_lobe, LobeKind, MIN_ALPHA,
-};
 use crate::model::oracle::evaluate_model;
 use crate::model::transport::Correction;
-use crate::model::{tir, Evaluation, LayerParams, NoTir, Tir};
-use crate::variant::{Interfaces, Model, Ndf, VariantKey};
-
-/// Grid side of each lobe's quadrature for the model's slice.
-const LOBE_GRID: u32 = 256;
+use crate::model::{tir, LayerParams, NoTir, Tir};
+use crate::variant::{Interfaces, Model, VariantKey};
 
 /// Grid side of the exact trapped fraction (`model::tir::trapped_fraction`).
 const TIR_GRID: u32 = 128;
@@ -90,6 +82,10 @@ pub struct ReferenceRow {
     /// …and the corrected model's.
     #[serde(default)]
     pub slice_corrected: Vec<[f64; 3]>,
+    /// The corrected model's slice error with its lobes reshaped as the walk's are
+    /// (`reference::slice::Shaping`): how much of it is the lobes' shapes.
+    #[serde(default)]
+    pub slice_shaped: ShapedErrors,
     /// Total transmittance: the reference's, the paper model's and the corrected model's
     /// (zero for a stack that ends in a base).
     #[serde(default)]
@@ -169,93 +165,6 @@ impl ReferenceRow {
     }
 }
 
-/// The model's BRDF per slice bin: each lobe of `evaluation` (made at view cosine `mu`)
-/// integrated over the bin, over its projected solid angle.
-///
-/// A lobe at least [`BROAD`] rough is integrated over each bin's own midpoint grid
-/// ([`BIN_GRID`]² points in θ and azimuth); a sharper one over its own quadrature, each point's
-/// energy landing in the bin of its direction (a bin grid would miss its peak; its quadrature's
-/// azimuths, once they fall inside the slice, all do: it is narrow beside the slice's width).
-pub fn model_slice(evaluation: &Evaluation, mu: f64, variant: VariantKey) -> Vec<[f64; 3]> {
-    let v = DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
-    let mut energy = vec![[0.0; 3]; SLICE_BINS];
-    let mut diffuse = [0.0; 3];
-    for (k, lobe) in evaluation.lobes.iter().enumerate() {
-        if lobe.weight.iter().all(|&w| w <= 0.0) {
-            continue;
-        }
-        if lobe.diffuse {
-            // ρ/π everywhere: the same in every bin.
-            for (d, w) in diffuse.iter_mut().zip(lobe.weight) {
-                *d += w / PI;
-            }
-            continue;
-        }
-        let kind = if k < 32 && evaluation.retro_mask & (1 << k) != 0 {
-            LobeKind::Retro
-        } else {
-            LobeKind::Mirror
-        };
-        let alpha = lobe.roughness.max(MIN_ALPHA);
-        let white = lobe_albedo(variant.g2, mu, alpha);
-        let lobe_v = lobe_view(v, kind);
-        // f·μ_l of this lobe per unit weight.
-        let term = |l: DVec3| unnormalised_lobe(variant.g2, Ndf::Ggx, lobe_v, l, alpha) / white;
-        let mut add = |i: usize, e: f64| {
-            for (sum, w) in energy[i].iter_mut().zip(lobe.weight) {
-                *sum += w * e;
-            }
-        };
-        if alpha >= BROAD {
-            for i in 0..SLICE_BINS {
-                add(i, bin_integral(i, &term));
-            }
-        } else {
-            for_each_lobe_direction(mu, alpha, LOBE_GRID, |l, d_omega| {
-                // The grid follows the mirror lobe; a retro lobe is its mirror image.
-                let l = lobe_view(l, kind);
-                if let Some(i) = slice_bin(l) {
-                    add(i, term(l) * d_omega);
-                }
-            });
-        }
-    }
-    (0..SLICE_BINS)
-        .map(|i| {
-            let omega = slice_projected_solid_angle(i);
-            std::array::from_fn(|c| energy[i][c] / omega + diffuse[c])
-        })
-        .collect()
-}
-
-/// Roughness from which a lobe is integrated over each bin's grid ([`model_slice`]).
-const BROAD: f64 = 0.05;
-
-/// Side of each bin's midpoint grid (θ × azimuth).
-const BIN_GRID: usize = 16;
-
-/// ∫ g(l) dω over slice bin `i` by a [`BIN_GRID`]² midpoint rule.
-fn bin_integral(i: usize, g: &impl Fn(DVec3) -> f64) -> f64 {
-    let (a, b) = super::slice_bin_edges(i);
-    let half = super::SLICE_HALF_WIDTH_DEG.to_radians();
-    let n = BIN_GRID as f64;
-    let (d_theta, d_phi) = ((b - a) / n, 2.0 * half / n);
-    let mut sum = 0.0;
-    for p in 0..BIN_GRID {
-        let signed = a + (p as f64 + 0.5) * d_theta;
-        let theta = signed.abs();
-        let (sin, cos) = theta.sin_cos();
-        // Positive θ on the mirror side (−x), negative on the view's side (+x).
-        let side = if signed >= 0.0 { -1.0 } else { 1.0 };
-        for q in 0..BIN_GRID {
-            let phi = -half + (q as f64 + 0.5) * d_phi;
-            let l = DVec3::new(side * sin * phi.cos(), sin * phi.sin(), cos);
-            sum += g(l) * sin * d_theta * d_phi;
-        }
-    }
-    sum
-}
-
 /// The model against the reference for one material (`layers`, named `name`) in `variant`'s
 /// model with its masking form, at each view cosine, the reference in interface mode
 /// `interfaces` following `paths` paths per channel from `seed`; `None` when `stop` was set.
@@ -291,7 +200,7 @@ pub fn compare(
         let model_no_tir = evaluate_model(variant.model, layers, mu, &fgd, &NoTir);
         let mut corrected = model.clone();
         correction.apply(&mut corrected, mu);
-        rows.push(ReferenceRow {
+        let mut row = ReferenceRow {
             cos_theta: mu,
             reference: reference.reflectance,
             unresolved: reference.unresolved,
@@ -304,7 +213,18 @@ pub fn compare(
             transmittance: reference.transmittance,
             transmittance_model: model.transmittance,
             transmittance_corrected: corrected.transmittance,
-        });
+            slice_shaped: ShapedErrors::default(),
+        };
+        let shaped = |shaping| {
+            let slice = shaped_slice(&corrected, mu, variant, &layers[0], shaping);
+            row.slice_error_of(&slice).0
+        };
+        row.slice_shaped = ShapedErrors {
+            top_fresnel: shaped(Shaping::TopFresnel),
+            exit: shaped(Shaping::Exit),
+            both: shaped(Shaping::Both),
+        };
+        rows.push(row);
     }
     Ok(Some(MaterialReference {
         material: name.to_owned(),

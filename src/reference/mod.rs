@@ -21,6 +21,7 @@
 
 pub mod compare;
 pub mod flows;
+pub mod slice;
 pub mod walk;
 
 use std::f64::consts::{PI, TAU};

@@ -333,7 +333,7 @@ fn the_model_slice_bins_each_lobe() {
     let fgd = ExactFgd::new(G2::HeightCorrelated);
     let variant = VariantKey::default();
     let e = crate::model::tm2::evaluate(&[coat(1.0, 0.3), base], 0.6, &fgd, &crate::model::NoTir);
-    for bin in compare::model_slice(&e, 0.6, variant) {
+    for bin in super::slice::model_slice(&e, 0.6, variant) {
         for c in 0..3 {
             let want = [0.5, 0.3, 0.1][c] / std::f64::consts::PI;
             assert!((bin[c] - want).abs() < 1e-12, "{} vs {want}", bin[c]);
@@ -341,7 +341,7 @@ fn the_model_slice_bins_each_lobe() {
     }
     // A glossy lobe peaks in the mirror direction's bin.
     let e = crate::model::tm2::evaluate(&[gold(0.05)], 0.6, &fgd, &crate::model::NoTir);
-    let slice = compare::model_slice(&e, 0.6, variant);
+    let slice = super::slice::model_slice(&e, 0.6, variant);
     let peak = (0..SLICE_BINS)
         .max_by(|&a, &b| slice[a][0].total_cmp(&slice[b][0]))
         .expect("bins");

@@ -334,6 +334,12 @@ fn a_reference_study_compares_each_material_with_the_reference() {
             90
         );
     }
+    // The corrected slice's error with its lobes reshaped as the walk's are: gold has no coat
+    // to reshape, dusty varnish's coat reshapes its lobes.
+    let shaped = |m: usize, part: &str| compared[m]["rows"][1]["slice_shaped"][part].as_f64();
+    assert_eq!(shaped(0, "both"), shaped(0, "top_fresnel"));
+    assert!(shaped(1, "both").unwrap() > 0.0);
+    assert_ne!(shaped(1, "both"), shaped(1, "top_fresnel"));
     // Gold alone: the model's FGD is the reference's single scattering, to its noise.
     let row = &compared[0]["rows"][0];
     for c in 0..3 {
@@ -375,6 +381,8 @@ fn a_reference_study_compares_each_material_with_the_reference() {
         "#### Random stacks",
         "| single | corrected | 4 |",
         "](reference-distribution.png)",
+        "corrected reshaped: Fresnel / exit / both |",
+        "The corrected lobes reshaped as the walk's are",
     ] {
         assert!(
             report.contains(expected),
