@@ -198,12 +198,25 @@ impl XyChart {
         root: DrawingArea<DB, plotters::coord::Shift>,
     ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
         root.fill(&WHITE)?;
+        self.draw_in(&root, 22, SeriesLabelPosition::UpperLeft)?;
+        root.present()?;
+        Ok(())
+    }
+
+    /// Draws the chart into `area` (filled and presented by the caller), its caption at
+    /// `caption` points and its legend at `legend`.
+    fn draw_in<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, plotters::coord::Shift>,
+        caption: u32,
+        legend: SeriesLabelPosition,
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
         let top = self.values().fold(0.0f64, f64::max);
         let bottom = self.values().fold(f64::INFINITY, f64::min);
         let top = if top > 0.0 { top } else { 1.0 };
-        let mut builder = ChartBuilder::on(&root);
+        let mut builder = ChartBuilder::on(area);
         builder
-            .caption(&self.title, ("sans-serif", 22))
+            .caption(&self.title, ("sans-serif", caption))
             .margin(14)
             .x_label_area_size(48)
             .y_label_area_size(78);
@@ -212,19 +225,18 @@ impl XyChart {
             // Many decades (a glossy peak over a diffuse floor): no more than six below the top.
             let bottom = bottom.max(top * 1e-6);
             let chart = builder.build_cartesian_2d(x, (bottom / 1.5..top * 1.5).log_scale())?;
-            self.plot(chart, " (log scale)")
+            self.plot(chart, " (log scale)", legend)
         } else {
             let chart = builder.build_cartesian_2d(x, 0.0..top * 1.12)?;
-            self.plot(chart, "")
-        }?;
-        root.present()?;
-        Ok(())
+            self.plot(chart, "", legend)
+        }
     }
 
     fn plot<'a, DB: DrawingBackend + 'a, Y: Ranged<ValueType = f64> + ValueFormatter<f64>>(
         &self,
         mut chart: ChartContext<'a, DB, Cartesian2d<plotters::coord::types::RangedCoordf64, Y>>,
         y_note: &str,
+        legend: SeriesLabelPosition,
     ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
         chart
             .configure_mesh()
@@ -271,7 +283,7 @@ impl XyChart {
         }
         chart
             .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
+            .position(legend)
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .label_font(("sans-serif", 14))
@@ -286,6 +298,11 @@ trait Plot {
         &self,
         root: DrawingArea<DB, plotters::coord::Shift>,
     ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>>;
+
+    /// The image's size in pixels.
+    fn size(&self) -> (u32, u32) {
+        (WIDTH, HEIGHT)
+    }
 }
 
 impl Plot for Chart {
@@ -306,19 +323,74 @@ impl Plot for XyChart {
     }
 }
 
+/// [`XyChart`]s side by side under one title, a panel each, in rows of [`PANEL_COLUMNS`]: a
+/// study's cost against image error with a panel per material, where one plot of every
+/// material's runs and fronts hid them under its legend. Each panel's legend sits at its upper
+/// right, where such a chart has no runs (high cost and high error at once).
+pub struct PanelChart {
+    pub title: String,
+    pub panels: Vec<XyChart>,
+}
+
+/// Panels per row of a [`PanelChart`], and each panel's size in pixels.
+const PANEL_COLUMNS: usize = 3;
+const PANEL_WIDTH: u32 = 600;
+const PANEL_HEIGHT: u32 = 420;
+
+/// Height of a [`PanelChart`]'s title band.
+const PANEL_TITLE: u32 = 44;
+
+impl PanelChart {
+    /// Writes `STEM.png` and `STEM.svg` atomically.
+    pub fn write(&self, stem: &Path) -> Result<()> {
+        write_plot(self, stem)
+    }
+
+    /// Rows and columns of the grid.
+    fn grid(&self) -> (usize, usize) {
+        let columns = self.panels.len().clamp(1, PANEL_COLUMNS);
+        (self.panels.len().div_ceil(columns).max(1), columns)
+    }
+}
+
+impl Plot for PanelChart {
+    fn draw_on<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, plotters::coord::Shift>,
+    ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        root.fill(&WHITE)?;
+        let (title, body) = root.split_vertically(PANEL_TITLE);
+        title.titled(&self.title, ("sans-serif", 22))?;
+        for (panel, area) in self.panels.iter().zip(&body.split_evenly(self.grid())) {
+            panel.draw_in(area, 18, SeriesLabelPosition::UpperRight)?;
+        }
+        root.present()?;
+        Ok(())
+    }
+
+    fn size(&self) -> (u32, u32) {
+        let (rows, columns) = self.grid();
+        (
+            columns as u32 * PANEL_WIDTH,
+            rows as u32 * PANEL_HEIGHT + PANEL_TITLE,
+        )
+    }
+}
+
 /// Writes `STEM.svg` (text stays text) and `STEM.png` (the bundled font's canvas) of `plot`,
 /// each atomically.
 fn write_plot(plot: &impl Plot, stem: &Path) -> Result<()> {
+    let (width, height) = plot.size();
     let svg_path = stem.with_extension("svg");
     let mut svg = String::new();
     {
-        let backend = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT));
+        let backend = SVGBackend::with_string(&mut svg, (width, height));
         plot.draw_on(backend.into_drawing_area())
             .map_err(|e| chart_error(&svg_path, e))?;
     }
     crate::imageio::write_file_atomically(&svg_path, &svg)?;
     let png_path = stem.with_extension("png");
-    let mut canvas = Canvas::new(WIDTH, HEIGHT);
+    let mut canvas = Canvas::new(width, height);
     {
         let area = (&mut canvas).into_drawing_area();
         plot.draw_on(area).map_err(|e| chart_error(&png_path, e))?;
@@ -328,7 +400,7 @@ fn write_plot(plot: &impl Plot, stem: &Path) -> Result<()> {
         .chunks(3)
         .flat_map(|p| [p[0], p[1], p[2], 255])
         .collect();
-    crate::imageio::write_png(&png_path, WIDTH as usize, HEIGHT as usize, &rgba)?;
+    crate::imageio::write_png(&png_path, width as usize, height as usize, &rgba)?;
     Ok(())
 }
 
@@ -628,5 +700,49 @@ mod tests {
             .filter(|p| p.iter().all(|&c| c < 100))
             .count();
         assert!(caption_dark > 20, "no caption text drawn");
+    }
+
+    #[test]
+    fn a_panel_chart_draws_each_panel_in_its_cell() {
+        let panel = |title: String| XyChart {
+            title,
+            x_label: "x".into(),
+            y_label: "y".into(),
+            x_range: (0.0, 1.0),
+            series: vec![XySeries {
+                label: "s".into(),
+                points: vec![(0.5, 2.0, 0.0, 0.0)],
+                line: false,
+                colour: 0,
+            }],
+        };
+        let chart = PanelChart {
+            title: "title".into(),
+            panels: (0..4).map(|i| panel(format!("panel {i}"))).collect(),
+        };
+        // Four panels: two rows of three cells, the last two empty.
+        let (width, height) = chart.size();
+        assert_eq!(
+            (width, height),
+            (3 * PANEL_WIDTH, 2 * PANEL_HEIGHT + PANEL_TITLE)
+        );
+        let mut canvas = Canvas::new(width, height);
+        chart.draw_on((&mut canvas).into_drawing_area()).unwrap();
+        let dark_in = |column: u32, row: u32| {
+            let (x0, y0) = (column * PANEL_WIDTH, PANEL_TITLE + row * PANEL_HEIGHT);
+            let mut dark = 0;
+            for y in y0 + 4..y0 + PANEL_HEIGHT - 4 {
+                for x in x0 + 4..x0 + PANEL_WIDTH - 4 {
+                    let p = 3 * (y * width + x) as usize;
+                    dark += usize::from(canvas.rgb[p..p + 3].iter().all(|&c| c < 80));
+                }
+            }
+            dark
+        };
+        for (column, row) in [(0, 0), (1, 0), (2, 0), (0, 1)] {
+            assert!(dark_in(column, row) > 500, "panel at ({column}, {row})");
+        }
+        assert_eq!(dark_in(1, 1), 0);
+        assert_eq!(dark_in(2, 1), 0);
     }
 }

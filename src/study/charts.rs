@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use crate::chart::{Chart, Series, XyChart, XySeries};
+use crate::chart::{Chart, PanelChart, Series, XyChart, XySeries};
 use crate::profile::results::{Results, Run};
 use crate::reference::compare::{MaterialReference, ReferenceRow};
 use crate::render::reference::Truth;
@@ -80,9 +80,9 @@ pub fn run_label(results: &Results, meta: &StudyMeta, i: usize) -> String {
     }
 }
 
-/// Cost against image error, per material: every run a point (FLIP, cost), the Pareto front
-/// joined. One chart by JIT instructions per pixel where counted, one by time.
-pub fn pareto_charts(results: &Results, meta: &StudyMeta) -> Vec<(&'static str, XyChart)> {
+/// Cost against image error, a panel per material: every run a point (FLIP, cost), the Pareto
+/// front joined. One chart by JIT instructions per pixel where counted, one by time.
+pub fn pareto_charts(results: &Results, meta: &StudyMeta) -> Vec<(&'static str, PanelChart)> {
     if !results.runs.iter().any(|r| r.image_error.is_some()) {
         return Vec::new();
     }
@@ -111,76 +111,75 @@ pub fn pareto_charts(results: &Results, meta: &StudyMeta) -> Vec<(&'static str, 
     kinds
         .iter()
         .map(|&(stem, instructions, y_label)| {
-            let (series, max_flip) = pareto_series(results, meta, &materials, instructions);
-            (
-                stem,
-                XyChart {
-                    title: format!("{} — cost against image error", meta.title),
-                    x_label: "mean FLIP against the reference image".into(),
-                    y_label: y_label.into(),
-                    x_range: (0.0, (max_flip * 1.15).max(1e-3)),
-                    series,
-                },
-            )
+            let panels = materials
+                .iter()
+                .map(|material| {
+                    let (series, max_flip) = pareto_series(results, meta, material, instructions);
+                    XyChart {
+                        title: (*material).to_owned(),
+                        x_label: "mean FLIP against the reference image".into(),
+                        y_label: y_label.into(),
+                        x_range: (0.0, (max_flip * 1.15).max(1e-3)),
+                        series,
+                    }
+                })
+                .collect();
+            let title = format!("{} — cost against image error", meta.title);
+            (stem, PanelChart { title, panels })
         })
         .collect()
 }
 
-/// Per material, a point per run with an image error and the joined Pareto front, costed by
-/// instructions or time; and the largest FLIP.
+/// A material's point per run with an image error and its joined Pareto front (one per
+/// truth), costed by instructions or time; and its largest FLIP.
 fn pareto_series(
     results: &Results,
     meta: &StudyMeta,
-    materials: &[&str],
+    material: &str,
     instructions: bool,
 ) -> (Vec<XySeries>, f64) {
     let mut series = Vec::new();
-    let mut colour = 0;
     let mut max_flip = 0.0f64;
-    for material in materials {
-        for (i, r) in results.runs.iter().enumerate() {
-            let (Some(e), Some(cost)) = (r.image_error, run_cost(r, instructions)) else {
-                continue;
-            };
-            if r.material != *material {
-                continue;
-            }
-            max_flip = max_flip.max(e.flip);
-            series.push(XySeries {
-                label: format!("{} ({})", run_label(results, meta, i), r.material),
-                points: vec![(e.flip, cost, 0.0, 0.0)],
-                line: false,
-                colour,
-            });
-            colour += 1;
+    for (i, r) in results.runs.iter().enumerate() {
+        let (Some(e), Some(cost)) = (r.image_error, run_cost(r, instructions)) else {
+            continue;
+        };
+        if r.material != material {
+            continue;
         }
-        let mut truths: Vec<Truth> = Vec::new();
-        for r in results.runs.iter().filter(|r| r.material == *material) {
-            if r.image_error.is_some() && !truths.contains(&Truth::of(r.variant)) {
-                truths.push(Truth::of(r.variant));
-            }
+        max_flip = max_flip.max(e.flip);
+        series.push(XySeries {
+            label: run_label(results, meta, i),
+            points: vec![(e.flip, cost, 0.0, 0.0)],
+            line: false,
+            colour: series.len(),
+        });
+    }
+    let mut truths: Vec<Truth> = Vec::new();
+    for r in results.runs.iter().filter(|r| r.material == material) {
+        if r.image_error.is_some() && !truths.contains(&Truth::of(r.variant)) {
+            truths.push(Truth::of(r.variant));
         }
-        for truth in truths {
-            let mut front: Vec<(f64, f64)> = pareto_front(results, material, truth, instructions)
-                .into_iter()
-                .filter_map(|i| {
-                    let r = &results.runs[i];
-                    Some((r.image_error?.flip, run_cost(r, instructions)?))
-                })
-                .collect();
-            front.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let label = match truth {
-                Truth::Paper => format!("Pareto front ({material})"),
-                other => format!("Pareto front ({material}, against {other})"),
-            };
-            series.push(XySeries {
-                label,
-                points: front.iter().map(|&(x, y)| (x, y, 0.0, 0.0)).collect(),
-                line: true,
-                colour,
-            });
-            colour += 1;
-        }
+    }
+    for truth in truths {
+        let mut front: Vec<(f64, f64)> = pareto_front(results, material, truth, instructions)
+            .into_iter()
+            .filter_map(|i| {
+                let r = &results.runs[i];
+                Some((r.image_error?.flip, run_cost(r, instructions)?))
+            })
+            .collect();
+        front.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let label = match truth {
+            Truth::Paper => "Pareto front".to_owned(),
+            other => format!("Pareto front (against {other})"),
+        };
+        series.push(XySeries {
+            label,
+            points: front.iter().map(|&(x, y)| (x, y, 0.0, 0.0)).collect(),
+            line: true,
+            colour: series.len(),
+        });
     }
     (series, max_flip)
 }
