@@ -63,10 +63,16 @@ float reference_random() {
     return float(reference_state >> 8u) * (1.0 / 16777216.0);
 }
 
+// The top interface's Fresnel factor F(v·h) at relative IOR η for a LOBE_FRESNEL lobe
+// (lib/light.glsl's light_lobe), 1 for any other (η = 0).
+float reference_fresnel(vec3 view, vec3 l, float eta) {
+    return eta > 0.0 ? fresnel_dielectric(max(dot(view, normalize(view + l)), 0.0), eta) : 1.0;
+}
+
 // The lobe's response to a unit irradiance from l, times μ_l, before its 1/E (already in the
 // table's weight): D·G2 / (4 μ_v), about `view` (the view, or its mirror image for a retro
-// lobe).
-float reference_lobe(vec3 n, vec3 view, vec3 l, float alpha) {
+// lobe), times reference_fresnel.
+float reference_lobe(vec3 n, vec3 view, vec3 l, float alpha, float eta) {
     float n_dot_l = dot(n, l);
     float n_dot_v = dot(n, view);
     if (n_dot_l <= 0.0 || n_dot_v <= 0.0) {
@@ -74,7 +80,7 @@ float reference_lobe(vec3 n, vec3 view, vec3 l, float alpha) {
     }
     vec3 h = normalize(view + l);
     return ggx_d(max(dot(n, h), 0.0), alpha) * masking_shadowing(n_dot_l, n_dot_v, alpha)
-        / (4.0 * n_dot_v);
+        / (4.0 * n_dot_v) * reference_fresnel(view, l, eta);
 }
 
 // A direction within the cone of half-angle `radius` around `axis`, uniform in solid angle.
@@ -86,8 +92,9 @@ vec3 reference_cone(vec3 axis, float radius) {
 }
 
 // The lights through a lobe: `diffuse`, μ_l/π; else reference_lobe about `view` (`behind`:
-// the transmitted lobe, lit from the mirrored directions). A disk light averages its cone.
-vec3 reference_lights(vec3 n, vec3 view, float alpha, bool diffuse, bool behind) {
+// the transmitted lobe, lit from the mirrored directions; `eta`: reference_fresnel's). A disk
+// light averages its cone.
+vec3 reference_lights(vec3 n, vec3 view, float alpha, bool diffuse, bool behind, float eta) {
     vec3 sum = vec3(0.0);
     uint count = LIGHTS != 0u ? light_info.x : 0u;
     for (uint j = 0u; j < count; ++j) {
@@ -99,7 +106,8 @@ vec3 reference_lights(vec3 n, vec3 view, float alpha, bool diffuse, bool behind)
         for (uint s = 0u; s < samples; ++s) {
             vec3 l = radius > 0.0 ? reference_cone(centre, radius) : centre;
             l = behind ? shade_behind(n, l) : l;
-            value += diffuse ? max(dot(n, l), 0.0) * INV_PI : reference_lobe(n, view, l, alpha);
+            value += diffuse ? max(dot(n, l), 0.0) * INV_PI
+                             : reference_lobe(n, view, l, alpha, eta);
         }
         sum += irradiance * (value / float(samples));
     }
@@ -168,9 +176,11 @@ vec3 reference_mis(float f, float pdf, vec3 seen, vec3 c) {
 // the lobe (the irradiance's over π for a diffuse lobe), so that only the environment's
 // departure from its filtered value is sampled. Under a uniform environment it is exact.
 // `behind`: the transmitted lobe, which reads the environment at the mirror images of the
-// lobe's directions (and draws those mirror images from the environment's sampling).
+// lobe's directions (and draws those mirror images from the environment's sampling). `eta`:
+// a LOBE_FRESNEL lobe's, whose f carries reference_fresnel and whose `white` is the albedo
+// the model gave it (the integral of f, exactly so for the f64 model's).
 vec3 reference_environment(vec3 n, vec3 view, float alpha, bool diffuse, bool behind,
-                           float white) {
+                           float white, float eta) {
     mat3 frame_of_n = basis(n);
     vec3 v = transpose(frame_of_n) * view;
     if (!diffuse && v.z <= 0.0) {
@@ -194,8 +204,11 @@ vec3 reference_environment(vec3 n, vec3 view, float alpha, bool diffuse, bool be
         }
         if (l.z > 0.0) {
             vec3 world = frame_of_n * l;
-            float f = diffuse ? l.z * INV_PI : reference_lobe(n, view, world, alpha);
-            float pdf = diffuse ? l.z * INV_PI : f * g1 / max(masking_shadowing(l.z, v.z, alpha), 1e-30);
+            float lobe = diffuse ? l.z * INV_PI : reference_lobe(n, view, world, alpha, 0.0);
+            float f = diffuse ? lobe : lobe * reference_fresnel(view, world, eta);
+            float pdf = diffuse
+                ? lobe
+                : lobe * g1 / max(masking_shadowing(l.z, v.z, alpha), 1e-30);
             sum += reference_mis(f, pdf, behind ? shade_behind(n, world) : world, c);
         }
         // From the environment.
@@ -211,7 +224,8 @@ vec3 reference_environment(vec3 n, vec3 view, float alpha, bool diffuse, bool be
             } else {
                 vec3 h = normalize(view + world);
                 float d = ggx_d(max(dot(n, h), 0.0), alpha);
-                f = d * masking_shadowing(n_dot_l, v.z, alpha) / (4.0 * v.z);
+                f = d * masking_shadowing(n_dot_l, v.z, alpha) / (4.0 * v.z)
+                    * reference_fresnel(view, world, eta);
                 pdf = g1 * d / (4.0 * v.z);
             }
             sum += reference_mis(f, pdf, seen, c);
@@ -226,21 +240,27 @@ vec3 reference_environment(vec3 n, vec3 view, float alpha, bool diffuse, bool be
 // hand them to tm_emit_lobe one by one), and each is integrated as shade_reference integrates a
 // tabulated one: its weight over the white lobe's albedo E (white_albedo, the table the
 // lights normalise by, of the variant's G2), times its integral against the lights and the
-// unfiltered environment. `behind`: a thin slab's transmitted lobe.
-void reference_emit(vec3 weight, float alpha, bool diffuse, bool retro, bool behind) {
+// unfiltered environment. `behind`: a thin slab's transmitted lobe. `top` (LOBE_FRESNEL):
+// the top interface's η and albedo A, which divides the lobe in place of E (light_lobe's).
+void reference_emit(vec3 weight, float alpha, bool diffuse, bool retro, bool behind,
+                    vec2 top) {
     float a = diffuse ? 1.0 : max(alpha, LIGHT_MIN_ALPHA);
-    float white = diffuse ? 1.0 : white_albedo(shade_n_dot_v, a);
+    float white = diffuse ? 1.0 : (top.x > 0.0 ? top.y : white_albedo(shade_n_dot_v, a));
+    if (white <= 0.0) {
+        return;
+    }
     vec3 view = retro ? 2.0 * dot(shade_n, shade_v) * shade_n - shade_v : shade_v;
-    vec3 radiance = reference_lights(shade_n, view, a, diffuse, behind);
+    vec3 radiance = reference_lights(shade_n, view, a, diffuse, behind, top.x);
     if (frame.params.y > 0.0) {
         radiance += frame.params.y
-            * reference_environment(shade_n, view, a, diffuse, behind, white);
+            * reference_environment(shade_n, view, a, diffuse, behind, white, top.x);
     }
     shade_sum += weight / white * radiance;
 }
 
-void tm_emit_lobe(vec3 weight, float alpha, uint kind) {
-    reference_emit(weight, alpha, kind == LOBE_DIFFUSE, kind == LOBE_RETRO, false);
+void tm_emit_lobe(vec3 weight, float alpha, uint kind, vec2 top) {
+    reference_emit(weight, alpha, kind == LOBE_DIFFUSE, kind == LOBE_RETRO, false,
+                   kind == LOBE_FRESNEL ? top : vec2(0.0));
 }
 
 // The pixel's lobes in the pass's model (model=ggx: shade_ggx's one lobe, F0·A + B from the
@@ -253,7 +273,7 @@ vec3 shade_reference_evaluated(vec3 n, vec3 v, float n_dot_v) {
         transmitted_alpha = top.params.x;
         vec2 ab = texture(split_sum, vec2(n_dot_v, sqrt(transmitted_alpha))).rg;
         vec3 albedo = vec3(f0_complex(top.ior.rgb, top.kappa.rgb)) * ab.x + ab.y;
-        reference_emit(albedo, transmitted_alpha, false, false, false);
+        reference_emit(albedo, transmitted_alpha, false, false, false, vec2(0.0));
         transmittance = max(vec3(1.0) - albedo, vec3(0.0));
     } else {
         vec3 reflectance;
@@ -264,7 +284,7 @@ vec3 shade_reference_evaluated(vec3 n, vec3 v, float n_dot_v) {
         }
     }
     if (TRANSMITS != 0u) {
-        reference_emit(transmittance, transmitted_alpha, false, false, true);
+        reference_emit(transmittance, transmitted_alpha, false, false, true, vec2(0.0));
     }
     return shade_sum;
 }
@@ -272,20 +292,21 @@ vec3 shade_reference_evaluated(vec3 n, vec3 v, float n_dot_v) {
 vec3 shade_reference(vec3 n, vec3 v, float n_dot_v) {
     float u = (sqrt(n_dot_v) * float(BAKED_SIZE - 1u) + 0.5) / float(BAKED_SIZE);
     vec3 sum = vec3(0.0);
-    // Two rows per lobe (render/reference.rs): (weight / E, √α), then (E, behind, 0, 0), behind
-    // 1 for the lobe a stack that transmits sends through (the last).
+    // Two rows per lobe (render/reference.rs): (weight / E, √α), then (E, behind, η, 0), behind
+    // 1 for the lobe a stack that transmits sends through (the last), η > 0 for a LOBE_FRESNEL
+    // lobe (E then the top interface's albedo).
     float rows = float(2u * LOBE_COUNT);
     for (uint k = 0u; k < LOBE_COUNT; ++k) {
         vec4 lobe = textureLod(baked_lobes, vec2(u, (float(2u * k) + 0.5) / rows), 0.0);
-        vec2 white = textureLod(baked_lobes, vec2(u, (float(2u * k) + 1.5) / rows), 0.0).rg;
+        vec3 white = textureLod(baked_lobes, vec2(u, (float(2u * k) + 1.5) / rows), 0.0).rgb;
         bool diffuse = lobe.a < 0.0;
         bool behind = white.y > 0.5;
         float alpha = lobe.a * lobe.a;
         vec3 view = tm_bit(RETRO_MASK, k) ? 2.0 * dot(n, v) * n - v : v;
-        vec3 radiance = reference_lights(n, view, alpha, diffuse, behind);
+        vec3 radiance = reference_lights(n, view, alpha, diffuse, behind, white.z);
         if (frame.params.y > 0.0) {
             radiance += frame.params.y
-                * reference_environment(n, view, alpha, diffuse, behind, white.x);
+                * reference_environment(n, view, alpha, diffuse, behind, white.x, white.z);
         }
         sum += lobe.rgb * radiance;
     }

@@ -2,7 +2,8 @@
 // Evaluates the model at given view cosines for one stack: the GPU side of `lamina eval
 // --backend gpu` and of the GPU-vs-CPU tests. Same library code as the forward pass.
 // Output per sample, `stride` vec4s: (R, lobe count), (T, retro mask), (the transmitted
-// lobe's α, 0, 0, 0), then (weight, α) per lobe; the retro mask's bits (bit k: lobe k is lit around the view, LOBE_RETRO; the first 32
+// lobe's α, then where a lobe is LOBE_FRESNEL its interface's η and albedo A and its index,
+// else 0, 0, 0), then (weight, α) per lobe; the retro mask's bits (bit k: lobe k is lit around the view, LOBE_RETRO; the first 32
 // lobes) are stored as the float's bits. With `lit`, each sample also carries a light direction
 // l (the normal is +z, the view (√(1 − μ²), 0, μ)) and a lobe's slot holds, in place of its
 // weight, its response to a unit irradiance from l (weight × lib/light.glsl's light_lobe at
@@ -36,8 +37,13 @@ uint eval_lobes;
 uint eval_retro;
 float eval_mu;
 vec3 eval_light;
+vec3 eval_top;
 
-void tm_emit_lobe(vec3 weight, float alpha, uint kind) {
+void tm_emit_lobe(vec3 weight, float alpha, uint kind, vec2 top) {
+    top = kind == LOBE_FRESNEL ? top : vec2(0.0);
+    if (kind == LOBE_FRESNEL) {
+        eval_top = vec3(top, float(eval_lobes));
+    }
     if (eval_lobes < TM_MAX_LOBES) {
         vec3 value = weight;
         if (push.lit != 0u && kind == LOBE_DIFFUSE) {
@@ -47,7 +53,7 @@ void tm_emit_lobe(vec3 weight, float alpha, uint kind) {
             vec3 v = vec3(sqrt(max(1.0 - eval_mu * eval_mu, 0.0)), 0.0, eval_mu);
             float a = light_alpha(alpha, push.angular_radius);
             value *= light_lobe(vec3(0.0, 0.0, 1.0), v, eval_mu, eval_light, a,
-                                kind == LOBE_RETRO);
+                                kind == LOBE_RETRO, top);
         }
         // A diffuse lobe reads back with α = −1 (render/eval.rs).
         results.values[eval_first_lobe + eval_lobes] =
@@ -68,6 +74,7 @@ void main() {
     eval_first_lobe = base + 3u;
     eval_lobes = 0u;
     eval_retro = 0u;
+    eval_top = vec3(0.0);
     vec3 reflectance;
     vec3 transmittance;
     float transmitted_alpha;
@@ -80,5 +87,5 @@ void main() {
         : tm2_evaluate(mu, reflectance, transmittance, transmitted_alpha);
     results.values[base] = vec4(reflectance, float(count));
     results.values[base + 1u] = vec4(transmittance, uintBitsToFloat(eval_retro));
-    results.values[base + 2u] = vec4(transmitted_alpha, 0.0, 0.0, 0.0);
+    results.values[base + 2u] = vec4(transmitted_alpha, eval_top);
 }

@@ -19,6 +19,18 @@
 //! A lobe the 6-flux model lights around the view (back-scatter, `LOBE_RETRO`) is the same lobe
 //! about the view's mirror image v' = 2(n·v)n − v: its peak is at l = v and μ_v' = μ_v.
 //!
+//! Under `transport=corrected` the top interface's lobe ([`Evaluation::top_fresnel`],
+//! `LOBE_FRESNEL`) is that interface's own microfacet lobe, Fresnel's factor kept:
+//!
+//!   f_0(l, v) = e_0 · D(h; α) · G2(l, v; α) · F(v·h; η) / (4 μ_l μ_v) / A,
+//!
+//! A the directional albedo the model gave the interface at the view, e_0 / A the transport's
+//! ratio: the interface's reflection as the walk has it, whose Fresnel factor rises across
+//! the lobe towards grazing (ALGORITHMS.md §17), scaled to the corrected energy. A is
+//! ∫ D G2 F / (4 μ_v) dω_l at the lobe's roughness (exactly so for the f64 model, to its
+//! table's accuracy for a variant's), so the lobe still integrates to e_0; a light that
+//! widens it keeps A.
+//!
 //! Punctual lights make a mirror's highlight a delta; lobes are shaded at α ≥
 //! [`MIN_ALPHA`] ([`MIN_ALPHA_FP16`] under `fp16=on`, where α² must stay a normal half).
 //! A directional light of angular radius θ_r (the sun: 0.27°) widens each lobe:
@@ -29,7 +41,7 @@
 use glam::DVec3;
 
 use super::microfacet::{self, masking_shadowing};
-use super::Evaluation;
+use super::{fresnel, Evaluation};
 use crate::variant::{Ndf, G2};
 
 /// Smallest roughness a lobe is shaded with under a light (f32 shaders and the oracle).
@@ -148,11 +160,13 @@ pub struct LightShading {
 }
 
 /// An evaluation's lobes made ready for lights at one view: each lobe's weight, kind, shading
-/// roughness and white albedo E (integrated once here, not per light direction).
+/// roughness, white albedo E (integrated once here, not per light direction) and, for the
+/// top's Fresnel lobe, its interface's η (0 for any other lobe, whose E then normalises it;
+/// the Fresnel lobe's E is the model's albedo A).
 pub struct LitLobes {
     shading: LightShading,
     v: DVec3,
-    lobes: Vec<([f64; 3], LobeKind, f64, f64)>,
+    lobes: Vec<([f64; 3], LobeKind, f64, f64, f64)>,
 }
 
 impl LitLobes {
@@ -172,7 +186,16 @@ impl LitLobes {
                     LobeKind::Mirror
                 };
                 let alpha = shading_alpha(lobe.roughness, shading.angular_radius, shading.fp16);
-                (lobe.weight, kind, alpha, lobe_albedo(shading.g2, mu, alpha))
+                match evaluation.top_fresnel {
+                    Some(top) if k == top.lobe => (lobe.weight, kind, alpha, top.albedo, top.eta),
+                    _ => (
+                        lobe.weight,
+                        kind,
+                        alpha,
+                        lobe_albedo(shading.g2, mu, alpha),
+                        0.0,
+                    ),
+                }
             })
             .collect();
         Self {
@@ -187,13 +210,19 @@ impl LitLobes {
     pub fn terms(&self, l: DVec3) -> Vec<[f64; 3]> {
         self.lobes
             .iter()
-            .map(|&(weight, kind, alpha, e)| {
+            .map(|&(weight, kind, alpha, e, eta)| {
                 if kind == LobeKind::Diffuse {
                     // Lambertian: μ_l/π, which integrates to 1 over the light directions.
                     return weight.map(|w| w * l.z.max(0.0) / std::f64::consts::PI);
                 }
+                if e <= 0.0 {
+                    return [0.0; 3];
+                }
                 let v = lobe_view(self.v, kind);
-                let value = unnormalised_lobe(self.shading.g2, self.shading.ndf, v, l, alpha);
+                let mut value = unnormalised_lobe(self.shading.g2, self.shading.ndf, v, l, alpha);
+                if eta > 0.0 {
+                    value *= fresnel::dielectric(v.dot((v + l).normalize()).max(0.0), eta);
+                }
                 weight.map(|w| w * value / e)
             })
             .collect()

@@ -198,6 +198,22 @@ pub struct Evaluation {
     /// The GGX roughness of the lobe the stack transmits ([`transmitted_alpha`]); what it
     /// carries is `transmittance`.
     pub transmitted_roughness: f64,
+    /// `transport=corrected`: the top interface's lobe, shaded under lights as that
+    /// interface's microfacet lobe with its Fresnel factor (`model::light`); `None` for the
+    /// paper's transport and for a stack whose top does not reflect from the air
+    /// (`transport::top_reflects`).
+    pub top_fresnel: Option<TopFresnel>,
+}
+
+/// The top interface whose lobe `transport=corrected` shades with Fresnel's factor: which lobe
+/// it is, the interface's relative IOR (mean over RGB) and the directional albedo the model
+/// gave it at the view (the lobe's weight before the transport's ratio: nothing above
+/// reflects), which normalises the lobe.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TopFresnel {
+    pub lobe: usize,
+    pub eta: f64,
+    pub albedo: f64,
 }
 
 /// Directional albedo of a rough interface: FGD(μ, α, η, κ) = ∫ F·D·G2 / (4μ) dω_o.

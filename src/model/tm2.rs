@@ -164,6 +164,7 @@ pub fn evaluate(stack: &[LayerParams], cos_theta: f64, fgd: &dyn Fgd, tir: &dyn 
         lobe_layers: (0..lobes.len()).collect(),
         lobes,
         retro_mask: 0,
+        top_fresnel: None,
     }
 }
 

@@ -268,6 +268,7 @@ impl Walk {
             lobes: self.lobes,
             lobe_layers: self.lobe_layers,
             retro_mask: self.retro_mask,
+            top_fresnel: None,
         }
     }
 }

@@ -24,7 +24,7 @@
 
 use super::angular::Transport;
 use super::oracle::evaluate_model;
-use super::{Evaluation, Fgd, LayerParams, Tir};
+use super::{Evaluation, Fgd, LayerParams, Tir, TopFresnel, INDEX_MATCHED};
 use crate::variant::{Interfaces, Model};
 
 /// View cosines at which a material's ratios are tabulated: k/(POINTS − 1). The transport
@@ -55,6 +55,32 @@ pub struct Correction {
     pub layers: Vec<[[f64; 3]; POINTS]>,
     /// Per point and channel: the same for the stack's transmittance.
     pub transmittance: [[f64; 3]; POINTS],
+    /// The top interface's layer and relative IOR where its lobe is shaded with Fresnel's
+    /// factor ([`top_reflects`]).
+    pub top: Option<(usize, f64)>,
+}
+
+/// The layer and relative IOR (mean over RGB) of the stack's top interface — the first that
+/// light from the air meets, every layer above it index-matched to the air and, in `model`
+/// `tm6`, without a medium — where it is a dielectric that reflects that light: not
+/// index-matched and denser than air. `transport=corrected` shades its lobe with its Fresnel
+/// factor under lights ([`Evaluation::top_fresnel`]; `tm_top_reflects` in
+/// lib/tm_common.glsl). An index-matched layer above changes nothing, as `lamina simplify`,
+/// which removes it, needs.
+pub fn top_reflects(layers: &[LayerParams], model: Model) -> Option<(usize, f64)> {
+    for (i, layer) in layers.iter().enumerate() {
+        if layer.is_conductor() || layer.is_diffuse() {
+            return None;
+        }
+        let eta = (layer.ior[0] + layer.ior[1] + layer.ior[2]) / 3.0 / super::IOR_AIR;
+        if (eta - 1.0).abs() >= INDEX_MATCHED {
+            return (eta >= 1.0).then_some((i, eta));
+        }
+        if model == Model::Tm6 && layer.depth > 0.0 {
+            return None;
+        }
+    }
+    None
 }
 
 fn ratio(truth: f64, paper: f64) -> f64 {
@@ -153,6 +179,7 @@ impl Correction {
         Self {
             layers: per_layer,
             transmittance,
+            top: top_reflects(layers, model),
         }
     }
 
@@ -164,13 +191,24 @@ impl Correction {
     }
 
     /// `evaluation` (the paper's f64 model's at view cosine `mu`: its lobes' layers known)
-    /// with each lobe scaled by its layer's ratio, and R and T to match.
+    /// with each lobe scaled by its layer's ratio, and R and T to match; the top interface's
+    /// first lobe marked as its Fresnel lobe where it reflects ([`top_reflects`]), with the
+    /// albedo the paper gave it (nothing above reflects, so its weight is the interface's own
+    /// albedo).
     pub fn apply(&self, evaluation: &mut Evaluation, mu: f64) {
         assert_eq!(
             evaluation.lobes.len(),
             evaluation.lobe_layers.len(),
             "a corrected evaluation needs each lobe's layer (the f64 model's)"
         );
+        evaluation.top_fresnel = self.top.and_then(|(layer, eta)| {
+            let lobe = evaluation.lobe_layers.iter().position(|&l| l == layer)?;
+            Some(TopFresnel {
+                lobe,
+                eta,
+                albedo: evaluation.lobes[lobe].weight[0],
+            })
+        });
         let mut reflectance = [0.0; 3];
         for (lobe, &layer) in evaluation.lobes.iter_mut().zip(&evaluation.lobe_layers) {
             let r = self.at(layer, mu);

@@ -14,7 +14,7 @@ use std::sync::atomic::AtomicBool;
 
 use serde::{Deserialize, Serialize};
 
-use super::slice::{model_slice, shaped_slice, ShapedErrors, Shaping};
+use super::slice::{exit_shaped_slice, model_slice};
 use super::{simulate, slice_projected_solid_angle, Estimate, Settings, SLICE_BINS};
 use crate::error::Result;
 use crate::model::fgd::ExactFgd;
@@ -82,10 +82,11 @@ pub struct ReferenceRow {
     /// …and the corrected model's.
     #[serde(default)]
     pub slice_corrected: Vec<[f64; 3]>,
-    /// The corrected model's slice error with its lobes reshaped as the walk's are
-    /// (`reference::slice::Shaping`): how much of it is the lobes' shapes.
+    /// The corrected model's slice error with the lobes from below the top leaving through it
+    /// as the walk's do (`reference::slice::exit_shaped_slice`): how much of it is still the
+    /// lobes' shapes.
     #[serde(default)]
-    pub slice_shaped: ShapedErrors,
+    pub slice_exit: f64,
     /// Total transmittance: the reference's, the paper model's and the corrected model's
     /// (zero for a stack that ends in a base).
     #[serde(default)]
@@ -213,17 +214,10 @@ pub fn compare(
             transmittance: reference.transmittance,
             transmittance_model: model.transmittance,
             transmittance_corrected: corrected.transmittance,
-            slice_shaped: ShapedErrors::default(),
+            slice_exit: 0.0,
         };
-        let shaped = |shaping| {
-            let slice = shaped_slice(&corrected, mu, variant, &layers[0], shaping);
-            row.slice_error_of(&slice).0
-        };
-        row.slice_shaped = ShapedErrors {
-            top_fresnel: shaped(Shaping::TopFresnel),
-            exit: shaped(Shaping::Exit),
-            both: shaped(Shaping::Both),
-        };
+        let exit = exit_shaped_slice(&corrected, mu, variant, layers);
+        row.slice_exit = row.slice_error_of(&exit).0;
         rows.push(row);
     }
     Ok(Some(MaterialReference {

@@ -5,7 +5,7 @@
 use crate::error::{Error, Result};
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::model::transport::Correction;
-use crate::model::{Evaluation, LayerParams, Lobe};
+use crate::model::{Evaluation, LayerParams, Lobe, TopFresnel};
 use crate::shader::interface::material_buffer;
 use crate::shader::kernel::{KernelInterface, LOCAL_SIZE_1D};
 use crate::tables::fgd::FgdLookup;
@@ -331,6 +331,12 @@ fn unpack(chunk: &[[f32; 4]]) -> GpuEvaluation {
             lobe_layers: Vec::new(),
             // The kernel stores the mask's bits, not a value (tm_eval.comp.glsl).
             retro_mask: chunk[1][3].to_bits(),
+            // η, A and the index of the LOBE_FRESNEL lobe, else 0.
+            top_fresnel: (chunk[2][1] > 0.0).then(|| TopFresnel {
+                lobe: chunk[2][3] as usize,
+                eta: f64::from(chunk[2][1]),
+                albedo: f64::from(chunk[2][2]),
+            }),
         },
     }
 }

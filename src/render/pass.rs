@@ -11,11 +11,12 @@
 
 use crate::error::{Error, Result};
 use crate::material::Surface;
+use crate::model::transport::top_reflects;
 use crate::model::{ends_diffuse, ends_transmissive, LayerParams};
 use crate::shader::specialize::{
     check_generic_fit, specialize_values, BakedShape, SpecializeError, Structure,
 };
-use crate::variant::{Mode, Model, ShadeSpec, VariantKey};
+use crate::variant::{Mode, Model, ShadeSpec, Transport, VariantKey};
 
 use super::classes::{Class, Routing};
 use super::forward::ForwardPass;
@@ -65,14 +66,28 @@ pub struct PassKey {
 impl PassKey {
     /// The pass that shades `layers` (top first; with the maps of `surface` when the stack
     /// varies over the surface) in `variant` under `lighting`. Refuses what no pass of the
-    /// variant can shade: a per-material mode of the `ggx` baseline or of a varying stack, and
-    /// a stack a per-material pipeline cannot hold.
+    /// variant can shade: a per-material mode of the `ggx` baseline or of a varying stack, a
+    /// stack a per-material pipeline cannot hold, and a baked table of `transport=corrected`
+    /// lobes under lights where the top's lobe is shaded with its Fresnel factor (the table
+    /// holds each lobe's weight and roughness, not that lobe's interface and albedo).
     pub fn new(
         variant: VariantKey,
         layers: &[LayerParams],
         surface: Option<&Surface>,
         lighting: &Lighting,
     ) -> Result<Self> {
+        if variant.mode == Mode::Baked
+            && variant.transport == Transport::Corrected
+            && !lighting.lights.is_empty()
+            && top_reflects(layers, variant.model).is_some()
+        {
+            return Err(Error::Unsupported(format!(
+                "variant {variant}: under lights, transport=corrected shades the top \
+                 interface's lobe with its Fresnel factor, which a baked table does not hold \
+                 (it keeps each lobe's weight and roughness); use mode=specialized, or \
+                 mode=baked without lights"
+            )));
+        }
         let material = if variant.mode.per_material() {
             if variant.model == Model::Ggx {
                 return Err(Error::Unsupported(format!(
@@ -343,5 +358,44 @@ impl PassCache {
     /// The pass of `key`, if prepared.
     pub fn find(&self, key: &PassKey) -> Option<&ForwardPass> {
         self.passes.iter().find(|p| p.key == *key)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::lights::{Light, LightKind};
+
+    #[test]
+    fn a_baked_table_of_corrected_lobes_under_lights_is_refused_by_name() {
+        let sun = Lighting {
+            environment: 1.0,
+            lights: vec![Light {
+                kind: LightKind::Directional {
+                    direction: [0.0, 1.0, 0.0],
+                    angular_radius: 0.0,
+                },
+                color: [1.0; 3],
+                intensity: 1.0,
+            }],
+        };
+        let varnished = crate::material::Stack::resolve("varnished-gold")
+            .unwrap()
+            .params();
+        let gold = crate::material::Stack::resolve("gold").unwrap().params();
+        let key = |text: &str| -> VariantKey { text.parse().unwrap() };
+        let baked = key("model=tm2,mode=baked,transport=corrected");
+        let error = match PassKey::uniform(baked, &varnished, &sun) {
+            Ok(_) => panic!("a baked corrected pass under lights was not refused"),
+            Err(e) => e.to_string(),
+        };
+        assert!(
+            error.contains("mode=baked") && error.contains("Fresnel"),
+            "{error}"
+        );
+        // Without lights, under the paper's transport, or with no dielectric top: shaded.
+        assert!(PassKey::uniform(baked, &varnished, &Lighting::default()).is_ok());
+        assert!(PassKey::uniform(key("model=tm2,mode=baked"), &varnished, &sun).is_ok());
+        assert!(PassKey::uniform(baked, &gold, &sun).is_ok());
     }
 }

@@ -40,7 +40,7 @@ use crate::model::light::{lobe_albedo, MIN_ALPHA};
 use crate::model::oracle::evaluate_model;
 use crate::model::transport::Correction;
 use crate::model::Fgd;
-use crate::model::{ends_transmissive, Evaluation, LayerParams, Lobe};
+use crate::model::{ends_transmissive, Evaluation, LayerParams, Lobe, TopFresnel};
 use crate::reference::compare::ExactTir;
 use crate::shader::specialize::{BakedShape, MAX_BAKED_LOBES};
 use crate::tables::split_sum::SplitSumTable;
@@ -198,12 +198,14 @@ fn ggx_evaluation(
         }],
         lobe_layers: Vec::new(),
         retro_mask: 0,
+        top_fresnel: None,
     }
 }
 
 /// Lobes over the view cosine (`evaluations` at [`TABLE_SIZE`] cosines, [`sample_cos`]), as the
-/// reference pass reads them: two rows per lobe, (weight / E, √α) then (E, behind, 0, 0) per
-/// sample, √α = −1 for a diffuse base's lobe (E = 1). A stack that transmits
+/// reference pass reads them: two rows per lobe, (weight / E, √α) then (E, behind, η, 0) per
+/// sample, √α = −1 for a diffuse base's lobe (E = 1); η > 0 for the top's Fresnel lobe
+/// (`Evaluation::top_fresnel`), whose E is the model's albedo A. A stack that transmits
 /// (`model::ends_transmissive`) adds, last, the lobe it transmits as the forward pass shades
 /// it (a thin slab: weight T, roughness `Evaluation::transmitted_roughness`), with behind = 1:
 /// lit from behind the surface. The table's `lobe_count` counts rows; its `retro_mask`,
@@ -211,10 +213,11 @@ fn ggx_evaluation(
 fn table_of(evaluations: &[Evaluation], layers: &[LayerParams]) -> Result<BakedTable> {
     let size = TABLE_SIZE;
     let first = &evaluations[0];
-    if evaluations
-        .iter()
-        .any(|e| e.lobes.len() != first.lobes.len() || e.retro_mask != first.retro_mask)
-    {
+    if evaluations.iter().any(|e| {
+        e.lobes.len() != first.lobes.len()
+            || e.retro_mask != first.retro_mask
+            || e.top_fresnel.is_some() != first.top_fresnel.is_some()
+    }) {
         return Err(Error::Unsupported(
             "the model emitted a different lobe set at different view cosines; the reference \
              needs one lobe set"
@@ -248,14 +251,17 @@ fn table_of(evaluations: &[Evaluation], layers: &[LayerParams]) -> Result<BakedT
             let (slot, j) = (t / size as usize, t % size as usize);
             let e = &evaluations[j];
             match kept.get(slot) {
-                Some(&k) => table_rows(e.lobes[k], sample_cos(j as u32, size), 0.0),
+                Some(&k) => {
+                    let top = e.top_fresnel.filter(|t| t.lobe == k);
+                    table_rows(e.lobes[k], sample_cos(j as u32, size), 0.0, top)
+                }
                 None => {
                     let through = Lobe {
                         weight: e.transmittance,
                         roughness: e.transmitted_roughness,
                         diffuse: false,
                     };
-                    table_rows(through, sample_cos(j as u32, size), 1.0)
+                    table_rows(through, sample_cos(j as u32, size), 1.0, None)
                 }
             }
         })
@@ -278,8 +284,9 @@ fn table_of(evaluations: &[Evaluation], layers: &[LayerParams]) -> Result<BakedT
 }
 
 /// A lobe's two rows at view cosine `mu` (`behind`: 1 for the transmitted lobe): (weight / E,
-/// √α) and (E, behind, 0, 0), √α = −1 and E = 1 for a diffuse base's lobe.
-fn table_rows(lobe: Lobe, mu: f64, behind: f32) -> [[f32; 4]; 2] {
+/// √α) and (E, behind, η, 0), √α = −1 and E = 1 for a diffuse base's lobe, E = A and η the
+/// interface's for the top's Fresnel lobe (`top`), η = 0 otherwise.
+fn table_rows(lobe: Lobe, mu: f64, behind: f32, top: Option<TopFresnel>) -> [[f32; 4]; 2] {
     let w = lobe.weight;
     if lobe.diffuse {
         return [
@@ -288,11 +295,15 @@ fn table_rows(lobe: Lobe, mu: f64, behind: f32) -> [[f32; 4]; 2] {
         ];
     }
     let alpha = lobe.roughness.max(MIN_ALPHA);
-    let white = lobe_albedo(G2_FORM, mu, alpha);
-    let w = w.map(|w| (w / white) as f32);
+    let (white, eta) = match top {
+        Some(t) => (t.albedo, t.eta),
+        None => (lobe_albedo(G2_FORM, mu, alpha), 0.0),
+    };
+    // A top that reflects nothing (its albedo 0) has a lobe of weight 0.
+    let w = w.map(|w| if white > 0.0 { (w / white) as f32 } else { 0.0 });
     [
         [w[0], w[1], w[2], alpha.sqrt() as f32],
-        [white as f32, behind, 0.0, 0.0],
+        [white as f32, behind, eta as f32, 0.0],
     ]
 }
 

@@ -390,6 +390,17 @@ fn the_corrected_transport_matches_its_cpu_twin() {
                     err <= 1e-3,
                     "{key} {material} μ {mu}: relative error {err:.2e}\nGPU {g:?}\nCPU {c:?}"
                 );
+                // The top's Fresnel lobe: the same lobe, interface and albedo.
+                match (g.top_fresnel, c.top_fresnel) {
+                    (Some(a), Some(b)) => assert!(
+                        a.lobe == b.lobe
+                            && (a.eta - b.eta).abs() < 1e-5
+                            && (a.albedo - b.albedo).abs() <= 1e-3 * b.albedo.max(1e-2),
+                        "{key} {material} μ {mu}: the top's Fresnel lobe {a:?} vs {b:?}"
+                    ),
+                    (None, None) => {}
+                    other => panic!("{key} {material} μ {mu}: the top's Fresnel lobe {other:?}"),
+                }
                 // The transport changes the energies (coated stacks: by more than the bound).
                 if material != &"glazed-ceramic" {
                     assert!(

@@ -323,7 +323,9 @@ fn a_reference_render_refuses_bad_arguments_by_name() {
 /// lowers the peak of dusty varnish's α = 0.1 coat lobe by 4.6 % ((0.1/0.1024)²), the rest is
 /// the real-time pass's FGD, white-albedo and TIR tables (`tir=lut32`; the 6-flux model's
 /// documented 1e-2) — plus 5 of the reference's standard errors and 1e-3 of the image's peak
-/// for the dark pixels. The widening is the real-time approximation this measures.
+/// for the dark pixels. The widening is the real-time approximation this measures. Varnished
+/// gold under `transport=corrected` against its own truth: the top's Fresnel lobe, shaded so by
+/// both passes.
 #[test]
 fn the_reference_lights_meet_the_real_time_light_term() {
     use lamina::render::lights::Lighting;
@@ -335,20 +337,24 @@ fn the_reference_lights_meet_the_real_time_light_term() {
     let gpu = common::gpu();
     let env = common::studio();
     let size = 32;
-    for material in ["gold", "dusty-varnish"] {
+    for (material, axes) in [
+        ("gold", "tir=lut32"),
+        ("dusty-varnish", "tir=lut32"),
+        ("varnished-gold", "tir=lut32,fgd=4d,transport=corrected"),
+    ] {
         let stack = lamina::material::Stack::resolve(material).unwrap();
         let layers = stack.params();
         let mut renderer =
             Renderer::with_target(&gpu, &env, EnvDesc::default(), TargetFormat::Float).unwrap();
         renderer.lighting = Lighting::load("sun-only").unwrap();
-        let variant = stack.variant(Some("tir=lut32")).unwrap();
+        let variant = stack.variant(Some(axes)).unwrap();
         let pass = renderer.prepare_uniform(variant, &layers).unwrap();
         let real_time = renderer.render(&pass, &layers, size, size).unwrap();
         let image = reference::render(
             &mut renderer,
             stack.model,
             &layers,
-            Truth::Paper,
+            Truth::of(variant),
             (size, size),
             Convergence {
                 spp: 64,

@@ -3,10 +3,13 @@
 // directional albedo E(μ_v, α) so that its response to light from every direction integrates
 // to the weight. src/model/light.rs derives it, with its sources, and is the oracle.
 // D is the ndf axis's form, G2 the g2 axis's (lib/microfacet.glsl); E is read from the
-// shading set's lobe_albedo table, built with the same G2.
+// shading set's lobe_albedo table, built with the same G2. Under transport=corrected the top
+// interface's lobe (LOBE_FRESNEL) is that interface's own microfacet lobe instead, with its
+// Fresnel factor (light_lobe's `top`).
 #ifndef LAMINA_LIB_LIGHT
 #define LAMINA_LIB_LIGHT
 
+#include "fresnel.glsl"
 #include "microfacet.glsl"
 #include "../bindings/shading.glsl"
 
@@ -34,7 +37,13 @@ float white_albedo(float n_dot_v, float alpha) {
 // light), times μ_l: D·G2 / (4 μ_v E(μ_v, α)). `n_dot_v` is the view cosine the model was
 // evaluated at; a retro lobe (6-flux back-scatter) is the same lobe about the view's mirror
 // image, whose peak is at l = v.
-float light_lobe(vec3 n, vec3 v, float n_dot_v, vec3 l, float alpha, bool retro) {
+// `top` (LOBE_FRESNEL, top.x > 0): the top interface's relative IOR η and the directional
+// albedo A the model gave it at this view. The lobe is then the interface's microfacet lobe,
+// D·G2·F(v·h) / (4 μ_v A), times the lobe's weight: the interface's own reflection scaled by
+// the transport's ratio (weight / A), whose Fresnel factor rises across the lobe towards
+// grazing as the walk's does (ALGORITHMS.md §17). It is normalised at the model's roughness:
+// a light that widens the lobe (a disk, the floor) spreads it and keeps A.
+float light_lobe(vec3 n, vec3 v, float n_dot_v, vec3 l, float alpha, bool retro, vec2 top) {
     float n_dot_l = dot(n, l);
     if (n_dot_l <= 0.0) {
         return 0.0;
@@ -43,6 +52,10 @@ float light_lobe(vec3 n, vec3 v, float n_dot_v, vec3 l, float alpha, bool retro)
     vec3 h = normalize(view + l);
     float d = float(ndf(real(max(dot(n, h), 0.0)), real(alpha)));
     float g2 = float(masking_shadowing(real(n_dot_l), real(n_dot_v), real(alpha)));
+    if (top.x > 0.0) {
+        float f = fresnel_dielectric(max(dot(view, h), 0.0), top.x);
+        return top.y > 0.0 ? d * g2 * f / (4.0 * n_dot_v * top.y) : 0.0;
+    }
     return d * g2 / (4.0 * n_dot_v * white_albedo(n_dot_v, alpha));
 }
 

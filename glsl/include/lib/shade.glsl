@@ -122,8 +122,8 @@ vec3 light_at(uint j, out vec3 l) {
 }
 
 // What the analytic lights send back through a lobe of unit weight and roughness α (`behind`:
-// send through the transmitted lobe, from behind the surface).
-vec3 lobe_lights(float alpha, bool retro, bool behind) {
+// send through the transmitted lobe, from behind the surface; `top`: light_lobe's).
+vec3 lobe_lights(float alpha, bool retro, bool behind, vec2 top) {
     vec3 sum = vec3(0.0);
     // LIGHTS = 0: a scene without lights compiles none of this (lavapipe compiles and runs
     // every path a constant does not remove).
@@ -133,7 +133,7 @@ vec3 lobe_lights(float alpha, bool retro, bool behind) {
         vec3 irradiance = light_at(j, l);
         l = behind ? shade_behind(shade_n, l) : l;
         float a = light_alpha(alpha, lights[j].radiance.w);
-        sum += irradiance * light_lobe(shade_n, shade_v, shade_n_dot_v, l, a, retro);
+        sum += irradiance * light_lobe(shade_n, shade_v, shade_n_dot_v, l, a, retro, top);
     }
     return sum;
 }
@@ -157,9 +157,9 @@ vec3 diffuse_light() {
 }
 
 // A lobe's radiance: the environment's, scaled, and the lights' (`behind`: the transmitted
-// lobe's, mirrored from the reflection lobe around `around`).
-vec3 lobe_light(vec3 around, float alpha, bool retro, bool behind) {
-    vec3 sum = lobe_lights(alpha, retro, behind);
+// lobe's, mirrored from the reflection lobe around `around`; `top`: light_lobe's).
+vec3 lobe_light(vec3 around, float alpha, bool retro, bool behind, vec2 top) {
+    vec3 sum = lobe_lights(alpha, retro, behind, top);
     float scale = frame.params.y;
     if (scale > 0.0) {
         sum += scale * lobe_radiance(shade_n, around, alpha, behind);
@@ -169,7 +169,7 @@ vec3 lobe_light(vec3 around, float alpha, bool retro, bool behind) {
 
 // What a thin slab transmits towards the view through a lobe of weight `t` and roughness α.
 vec3 transmitted_light(vec3 t, float alpha) {
-    return t * lobe_light(reflect(-shade_v, shade_n), alpha, false, true);
+    return t * lobe_light(reflect(-shade_v, shade_n), alpha, false, true, vec2(0.0));
 }
 
 void shade_begin(vec3 p, vec3 n, vec3 v, float n_dot_v) {
@@ -186,7 +186,8 @@ vec3 shade_ggx(vec3 n, vec3 v, float n_dot_v) {
     vec2 ab = texture(split_sum, vec2(n_dot_v, sqrt(alpha))).rg;
     real3 f0 = real3(f0_complex(top.ior.rgb, top.kappa.rgb));
     real3 albedo = f0 * real(ab.x) + real(ab.y);
-    vec3 radiance = vec3(real3(lobe_light(reflect(-v, n), alpha, false, false)) * albedo);
+    vec3 radiance =
+        vec3(real3(lobe_light(reflect(-v, n), alpha, false, false, vec2(0.0))) * albedo);
     if (TRANSMITS != 0u) {
         // The baseline's top interface as a thin slab: what it does not reflect, through a
         // lobe of its roughness.
@@ -198,14 +199,15 @@ vec3 shade_ggx(vec3 n, vec3 v, float n_dot_v) {
 // The reference pass over a varying stack integrates each lobe by Monte Carlo instead
 // (forward.frag.glsl's own tm_emit_lobe).
 #ifndef LAMINA_REFERENCE_EVALUATED
-void tm_emit_lobe(vec3 weight, float alpha, uint kind) {
+void tm_emit_lobe(vec3 weight, float alpha, uint kind, vec2 top) {
     if (kind == LOBE_DIFFUSE) {
         shade_sum += weight * diffuse_light();
         return;
     }
     bool retro = kind == LOBE_RETRO;
     vec3 around = retro ? shade_v : reflect(-shade_v, shade_n);
-    shade_sum += weight * lobe_light(around, alpha, retro, false);
+    top = kind == LOBE_FRESNEL ? top : vec2(0.0);
+    shade_sum += weight * lobe_light(around, alpha, retro, false, top);
 }
 #endif
 
@@ -226,7 +228,8 @@ vec3 shade_lobes(vec3 n, vec3 v, float n_dot_v) {
 
 // The baked lobes at the view cosine: each lobe's (weight, √α) interpolated linearly between
 // its two samples around √μ by the sampler (render/baked.rs), then lit like the model's
-// (lobe_light). The row coordinate is a texel centre, so the filter's weight on the
+// (lobe_light). The table holds no lobe's Fresnel shape: a pass that would light one
+// (transport=corrected's LOBE_FRESNEL under lights) is refused (render/pass.rs). The row coordinate is a texel centre, so the filter's weight on the
 // neighbouring lobe is zero.
 vec3 shade_baked(vec3 n, vec3 v, float n_dot_v) {
     float u = (sqrt(n_dot_v) * float(BAKED_SIZE - 1u) + 0.5) / float(BAKED_SIZE);
@@ -244,7 +247,7 @@ vec3 shade_baked(vec3 n, vec3 v, float n_dot_v) {
         // A thin slab's last row is its transmitted lobe, lit from behind (transmitted_light).
         bool behind = TRANSMITS != 0u && k + 1u == LOBE_COUNT;
         bool retro = !behind && tm_bit(RETRO_MASK, k);
-        sum += lobe.rgb * lobe_light(retro ? v : mirror, alpha, retro, behind);
+        sum += lobe.rgb * lobe_light(retro ? v : mirror, alpha, retro, behind, vec2(0.0));
     }
     return sum;
 }

@@ -130,6 +130,8 @@ struct Tm2State {
     // energies).
     TmTransportAt at;
     vec3 emitted;
+    // Whether an interface above has been met (tm_top_reflects' `first` until then).
+    bool met;
 };
 
 // Adds component c (layer i; `g_next`: the g of the next layer's reflection) below the stack
@@ -145,7 +147,7 @@ void tm2_add(uint i, Tm2Factors c, float g_next, inout Tm2State s, inout vec3 tr
         vec3 rho = tm_layer(i).diffuse.rgb;
         vec3 weight = tm_diffuse_weight(vec3(s.e.t), rho, tm_diffuse_slab(i, false));
         vec3 emitted = tm_transported(i, s.at, weight);
-        tm_emit_lobe(emitted, 1.0, LOBE_DIFFUSE);
+        tm_emit_lobe(emitted, 1.0, LOBE_DIFFUSE, vec2(0.0));
         s.emitted += emitted;
         s.r_prev += real3(weight);
         transmittance = vec3(0.0);
@@ -185,7 +187,11 @@ void tm2_add(uint i, Tm2Factors c, float g_next, inout Tm2State s, inout vec3 tr
     real energy = tm_avg(weight);
     float lobe_g = energy > real(0.0) ? min(float((g_total - s.g_prev) / energy), 1.0) : 0.0;
     vec3 emitted = tm_transported(i, s.at, vec3(weight));
-    tm_emit_lobe(emitted, hg_alpha_of_g(lobe_g), LOBE_MIRROR);
+    // The top's lobe: nothing above it, so its weight is the interface's own albedo c.r.
+    bool top = tm_top_reflects(i, !s.met, c.conductor, c.eta);
+    s.met = s.met || !c.skip;
+    tm_emit_lobe(emitted, hg_alpha_of_g(lobe_g), top ? LOBE_FRESNEL : LOBE_MIRROR,
+                 vec2(c.eta, float(weight.x)));
     s.emitted += emitted;
     s.r_prev = r_total;
     s.g_prev = g_total;
@@ -202,7 +208,7 @@ uint tm2_evaluate(float mu, out vec3 reflectance, out vec3 transmittance,
     tm2_factors(mu, count);
 
     Tm2State s = Tm2State(tm_slab_empty(), tm_slab1_empty(), real3(0.0), real(0.0), 1.0,
-                          tm_transport_at(mu), vec3(0.0));
+                          tm_transport_at(mu), vec3(0.0), false);
     transmittance = vec3(1.0);
     if (SPECIALIZED) {
         [[unroll]] for (uint i = 0u; i < LAYER_COUNT; ++i) {

@@ -317,7 +317,7 @@ float tm6_held_ratio[TM6_HELD];
 // `slot` of the walk of channel `c` (channels=serial, which holds it until the last channel's
 // walk); a diffuse lobe's α is 1.
 void tm6_emit(inout Tm6Walk w, uint i, uint slot, uint c, TM6_T weight, float ratio,
-              uint kind) {
+              uint kind, float eta) {
 #ifdef LAMINA_TM6_SERIAL
     if (c == 0u) {
         tm6_held_r[slot] = weight;
@@ -336,7 +336,8 @@ void tm6_emit(inout Tm6Walk w, uint i, uint slot, uint c, TM6_T weight, float ra
     float sum = ratio;
 #endif
     vec3 emitted = tm_transported(i, w.at, rgb);
-    tm_emit_lobe(emitted, kind == LOBE_DIFFUSE ? 1.0 : hg_alpha_of_g(min(sum / 3.0, 1.0)), kind);
+    tm_emit_lobe(emitted, kind == LOBE_DIFFUSE ? 1.0 : hg_alpha_of_g(min(sum / 3.0, 1.0)), kind,
+                 vec2(eta, rgb.x));
     w.emitted += emitted;
 }
 
@@ -349,6 +350,8 @@ bool tm6_step(uint step, uint layers, uint c, inout Tm6Walk w, inout TM6_T trans
     uint i = step >> 1u;
     LayerGpu layer = tm_layer(i);
     bool substrate = false;
+    // The top's lobe (LOBE_FRESNEL): layer 0's interface, when it reflects from the air.
+    float top_eta = 0.0;
     TM6_T up[3] = w.e.up;
     TM6_T up_g[3] = w.g.up;
     if ((step & 1u) == 0u && tm_diffuse_at(i, layer)) {
@@ -357,7 +360,7 @@ bool tm6_step(uint step, uint layers, uint c, inout Tm6Walk w, inout TM6_T trans
         TM6_T t_view = w.e.down[0] + w.e.down[1] + w.e.down[2];
         TM6_T weight = TM6_CH(tm_diffuse_weight(vec3(t_view), layer.diffuse.rgb,
                                                 tm_diffuse_slab(i, true)));
-        tm6_emit(w, i, 3u * step, c, weight, 0.0, LOBE_DIFFUSE);
+        tm6_emit(w, i, 3u * step, c, weight, 0.0, LOBE_DIFFUSE, 0.0);
         w.lobe_count++;
         w.prev[0] += weight;
         transmittance = TM6_T(0.0);
@@ -383,6 +386,9 @@ bool tm6_step(uint step, uint layers, uint c, inout Tm6Walk w, inout TM6_T trans
         bool refracts = !tm_matched_at(i, eta);
         if (refracts) {
             cos_below = tm_refracted_cos(w.cos_i, eta);
+        }
+        if (tm_top_reflects(i, !w.primary && !w.backward, false, eta)) {
+            top_eta = eta;
         }
         w.medium = tm_medium_at(i, layer);
         if (w.medium) {
@@ -469,9 +475,10 @@ bool tm6_step(uint step, uint layers, uint c, inout Tm6Walk w, inout TM6_T trans
     for (int k = 0; k < 3; ++k) {
         if (emit[k]) {
             TM6_T dr = up[k] - w.prev[k];
+            uint kind = k == 2 ? LOBE_RETRO
+                : (k == 0 && top_eta > 0.0 ? LOBE_FRESNEL : LOBE_MIRROR);
             tm6_emit(w, i, 3u * step + uint(k), c, max(dr, TM6_T(0.0)),
-                     tm6_ratio_sum(up_g[k] - w.prev_g[k], dr),
-                     k == 2 ? LOBE_RETRO : LOBE_MIRROR);
+                     tm6_ratio_sum(up_g[k] - w.prev_g[k], dr), kind, top_eta);
             w.lobe_count++;
         }
         w.prev[k] = up[k];

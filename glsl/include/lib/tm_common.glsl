@@ -23,6 +23,10 @@ const float IOR_AIR = 1.0;
 #define LOBE_RETRO 1u
 // A diffuse base's Lambertian lobe (src/model/diffuse.rs): lit by the irradiance.
 #define LOBE_DIFFUSE 2u
+// transport=corrected: the top interface's lobe (tm_top_reflects), lit like LOBE_MIRROR by the
+// environment and, under lights, as that interface's microfacet lobe with its Fresnel factor
+// (lib/light.glsl's light_lobe).
+#define LOBE_FRESNEL 3u
 
 // Largest lobe count of a variant (src/model/mod.rs's max_lobes, whose constants
 // generated/codes.glsl carries): one per layer (2-flux), 6n − 2 in 6-flux. src/render/eval.rs
@@ -33,8 +37,11 @@ const uint TM_MAX_LOBES =
 // Each model hands every lobe it finds, top to bottom, to this function, which the including
 // shader defines (the forward pass shades it, tm_eval stores it): the lobes are not collected
 // in an array first.
-//   weight: RGB energy (directional albedo), alpha: GGX roughness, kind: LOBE_MIRROR or LOBE_RETRO
-void tm_emit_lobe(vec3 weight, float alpha, uint kind);
+//   weight: RGB energy (directional albedo), alpha: GGX roughness, kind: LOBE_MIRROR,
+//   LOBE_RETRO, LOBE_DIFFUSE or LOBE_FRESNEL; top: LOBE_FRESNEL's interface, its relative IOR
+//   η and the directional albedo the model gave it at the view (its weight before the
+//   transport's ratio), else unused.
+void tm_emit_lobe(vec3 weight, float alpha, uint kind, vec2 top);
 
 // The stack composed so far, seen as two-flux scattering: from above, reflectance r and
 // transmittance t; from below, r' (rp), t' (tp) and q = 1 − r'. Components are added below it
@@ -401,6 +408,16 @@ bool tm_clear_at(uint i, float eta) {
 // Denser below (η ≥ 1): light going down cannot be trapped, light going up can.
 bool tm_denser_at(uint i, float eta) {
     return tm_fixed_at(i) ? tm_bit(DENSER_MASK, i) : eta >= 1.0;
+}
+
+// Whether layer i's interface, of relative IOR η, emits the top's Fresnel lobe under
+// transport=corrected (LOBE_FRESNEL): the `first` interface light meets (every layer above
+// index-matched to the air, and in 6-flux without a medium), a dielectric (not `opaque`: a
+// conductor or a diffuse base) that is not index-matched and is denser than air.
+// src/model/transport.rs's `top_reflects` is the CPU side.
+bool tm_top_reflects(uint i, bool first, bool opaque, float eta) {
+    return TRANSPORT == TRANSPORT_CORRECTED && first && !opaque && !tm_matched_at(i, eta)
+        && tm_denser_at(i, eta);
 }
 
 bool tm_medium_at(uint i, LayerGpu layer) {

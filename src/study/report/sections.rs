@@ -8,7 +8,6 @@ use std::path::Path;
 use crate::profile::image_error::{error_map_path, fp32_error_map_path};
 use crate::profile::results::{ImageError, Run};
 use crate::reference::compare::{MaterialReference, ReferenceRow};
-use crate::reference::slice::ShapedErrors;
 use crate::render::reference::Truth;
 use crate::study::charts::{pareto_front, reference_chart_stem, run_label, SIGNIFICANT_FLOORS};
 use crate::study::dirs::StudyDir;
@@ -477,7 +476,7 @@ fn reference_table(md: &mut String, s: &StudyDir, truth: &str) {
         md,
         "| material | model | cos θ | reference R | paper R | paper error | without TIR | \
          corrected R | corrected error (worst channel) | slice error paper / corrected (noise) | \
-         corrected reshaped: Fresnel / exit / both |"
+         corrected, lobes below the top leaving through it |"
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|");
     let mean = |v: [f64; 3]| (v[0] + v[1] + v[2]) / 3.0;
@@ -494,8 +493,7 @@ fn reference_table(md: &mut String, s: &StudyDir, truth: &str) {
             let _ = writeln!(
                 md,
                 "| {} | {} | {:.2} | {:.4} ± {:.4} | {:.4} | {:+.1} % | {:+.1} % | {:.4} | \
-                 {:+.1} % ({:+.1} %) | {:.1} % / {:.1} % ({:.1} %) | {:.1} % / {:.1} % / \
-                 {:.1} % |",
+                 {:+.1} % ({:+.1} %) | {:.1} % / {:.1} % ({:.1} %) | {:.1} % |",
                 e.material,
                 e.model,
                 row.cos_theta,
@@ -510,9 +508,7 @@ fn reference_table(md: &mut String, s: &StudyDir, truth: &str) {
                 100.0 * slice,
                 100.0 * slice_c,
                 100.0 * noise,
-                100.0 * row.slice_shaped.top_fresnel,
-                100.0 * row.slice_shaped.exit,
-                100.0 * row.slice_shaped.both
+                100.0 * row.slice_exit
             );
             n += 1;
             paper10 += usize::from(error.abs() < 0.1);
@@ -526,7 +522,7 @@ fn reference_table(md: &mut String, s: &StudyDir, truth: &str) {
             if e.layers > 1 {
                 slices.paper.push(slice);
                 slices.corrected.push(slice_c);
-                slices.shaped.push(row.slice_shaped);
+                slices.exit.push(row.slice_exit);
             }
         }
     }
@@ -545,12 +541,12 @@ fn reference_table(md: &mut String, s: &StudyDir, truth: &str) {
 }
 
 /// The coated stacks' slice errors per point: the paper's, the corrected model's, and the
-/// corrected model's with its lobes reshaped as the walk's are.
+/// corrected model's with the lobes below the top leaving through it as the walk's do.
 #[derive(Default)]
 struct Slices {
     paper: Vec<f64>,
     corrected: Vec<f64>,
-    shaped: Vec<ShapedErrors>,
+    exit: Vec<f64>,
 }
 
 /// [`Slices`] in words.
@@ -568,23 +564,20 @@ fn slice_reading(s: Slices) -> String {
         v.sort_by(f64::total_cmp);
         100.0 * v.get(v.len() / 2).copied().unwrap_or(0.0)
     };
-    let shaped = |f: fn(&ShapedErrors) -> f64| median(s.shaped.iter().map(f).collect());
     let mut text = format!(
         "Median slice error of the coated stacks: paper {:.2} %, corrected {:.2} % (corrected \
-         lower at {lower} of {} points: it scales the paper's lobes and keeps their shapes).",
+         lower at {lower} of {} points: it scales the paper's lobes and shades the top \
+         interface's with its Fresnel factor F(v·h)).",
         median(s.paper.clone()),
         median(s.corrected.clone()),
         s.paper.len()
     );
-    if s.shaped.iter().any(|e| e.both > 0.0) {
+    if s.exit.iter().any(|&e| e > 0.0) {
         text += &format!(
-            " The corrected lobes reshaped as the walk's are (`reference::slice`, a diagnosis: \
-             lamina does not shade them so yet), each renormalised to its energy: the top \
-             interface's lobe times its Fresnel factor F(v·h) {:.2} %, the lobes below it times \
-             the top's transmittance towards the light {:.2} %, both {:.2} %.",
-            shaped(|e| e.top_fresnel),
-            shaped(|e| e.exit),
-            shaped(|e| e.both)
+            " With the lobes below the top leaving through it as the walk's do, each times the \
+             top's transmittance towards the light and renormalised to its energy \
+             (`reference::slice`, a diagnosis: lamina does not shade them so), {:.2} %.",
+            median(s.exit.clone())
         );
     }
     text
