@@ -390,7 +390,8 @@ fn a_reference_study_compares_each_material_with_the_reference() {
         "| single | corrected | 4 |",
         "](reference-distribution.png)",
         "corrected, lobes below the top leaving through it |",
-        "The corrected lobes reshaped as the walk's are",
+        "shades the top interface's with its Fresnel factor",
+        "With the lobes below the top leaving through it as the walk's do",
     ] {
         assert!(
             report.contains(expected),
