@@ -259,8 +259,7 @@ void reference_emit(vec3 weight, float alpha, bool diffuse, bool retro, bool beh
 }
 
 void tm_emit_lobe(vec3 weight, float alpha, uint kind, vec2 top) {
-    reference_emit(weight, alpha, kind == LOBE_DIFFUSE, kind == LOBE_RETRO, false,
-                   kind == LOBE_FRESNEL ? top : vec2(0.0));
+    reference_emit(weight, alpha, kind == LOBE_DIFFUSE, kind == LOBE_RETRO, false, top);
 }
 
 // The pixel's lobes in the pass's model (model=ggx: shade_ggx's one lobe, F0·A + B from the

@@ -40,7 +40,6 @@ vec3 eval_light;
 vec3 eval_top;
 
 void tm_emit_lobe(vec3 weight, float alpha, uint kind, vec2 top) {
-    top = kind == LOBE_FRESNEL ? top : vec2(0.0);
     if (kind == LOBE_FRESNEL) {
         eval_top = vec3(top, float(eval_lobes));
     }

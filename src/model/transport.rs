@@ -22,6 +22,7 @@
 //! material with maps keeps its per-pixel variation (the ratio is taken at its nominal
 //! values). The stack's transmittance is scaled the same way.
 
+use super::adding::avg;
 use super::angular::Transport;
 use super::oracle::evaluate_model;
 use super::{Evaluation, Fgd, LayerParams, Tir, TopFresnel, INDEX_MATCHED};
@@ -72,7 +73,7 @@ pub fn top_reflects(layers: &[LayerParams], model: Model) -> Option<(usize, f64)
         if layer.is_conductor() || layer.is_diffuse() {
             return None;
         }
-        let eta = (layer.ior[0] + layer.ior[1] + layer.ior[2]) / 3.0 / super::IOR_AIR;
+        let eta = avg(layer.ior) / super::IOR_AIR;
         if (eta - 1.0).abs() >= INDEX_MATCHED {
             return (eta >= 1.0).then_some((i, eta));
         }

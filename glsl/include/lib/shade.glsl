@@ -206,7 +206,6 @@ void tm_emit_lobe(vec3 weight, float alpha, uint kind, vec2 top) {
     }
     bool retro = kind == LOBE_RETRO;
     vec3 around = retro ? shade_v : reflect(-shade_v, shade_n);
-    top = kind == LOBE_FRESNEL ? top : vec2(0.0);
     shade_sum += weight * lobe_light(around, alpha, retro, false, top);
 }
 #endif

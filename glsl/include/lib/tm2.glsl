@@ -191,7 +191,7 @@ void tm2_add(uint i, Tm2Factors c, float g_next, inout Tm2State s, inout vec3 tr
     bool top = tm_top_reflects(i, !s.met, c.conductor, c.eta);
     s.met = s.met || !c.skip;
     tm_emit_lobe(emitted, hg_alpha_of_g(lobe_g), top ? LOBE_FRESNEL : LOBE_MIRROR,
-                 vec2(c.eta, float(weight.x)));
+                 top ? vec2(c.eta, float(weight.x)) : vec2(0.0));
     s.emitted += emitted;
     s.r_prev = r_total;
     s.g_prev = g_total;

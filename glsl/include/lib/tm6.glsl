@@ -315,7 +315,7 @@ float tm6_held_ratio[TM6_HELD];
 
 // Emits a lobe of layer `i` (§5.7): its weight and the summed ratio of its channels, in
 // `slot` of the walk of channel `c` (channels=serial, which holds it until the last channel's
-// walk); a diffuse lobe's α is 1.
+// walk); a diffuse lobe's α is 1, a LOBE_FRESNEL lobe's interface of relative IOR `eta`.
 void tm6_emit(inout Tm6Walk w, uint i, uint slot, uint c, TM6_T weight, float ratio,
               uint kind, float eta) {
 #ifdef LAMINA_TM6_SERIAL
@@ -337,7 +337,7 @@ void tm6_emit(inout Tm6Walk w, uint i, uint slot, uint c, TM6_T weight, float ra
 #endif
     vec3 emitted = tm_transported(i, w.at, rgb);
     tm_emit_lobe(emitted, kind == LOBE_DIFFUSE ? 1.0 : hg_alpha_of_g(min(sum / 3.0, 1.0)), kind,
-                 vec2(eta, rgb.x));
+                 kind == LOBE_FRESNEL ? vec2(eta, rgb.x) : vec2(0.0));
     w.emitted += emitted;
 }
 

@@ -40,7 +40,7 @@ const uint TM_MAX_LOBES =
 //   weight: RGB energy (directional albedo), alpha: GGX roughness, kind: LOBE_MIRROR,
 //   LOBE_RETRO, LOBE_DIFFUSE or LOBE_FRESNEL; top: LOBE_FRESNEL's interface, its relative IOR
 //   η and the directional albedo the model gave it at the view (its weight before the
-//   transport's ratio), else unused.
+//   transport's ratio); (0, 0) for any other lobe.
 void tm_emit_lobe(vec3 weight, float alpha, uint kind, vec2 top);
 
 // The stack composed so far, seen as two-flux scattering: from above, reflectance r and
