@@ -19,7 +19,7 @@
 //! | mode | `generic`, `specialized`, `specialized-values`, `baked` | spec constant 7 (+ the material's structure, ids 8…17, and values, ids 32…) |
 //! | transport | `paper`, `corrected` | spec constant 21 (+ the material's energy ratios in its buffer) |
 //! | interfaces | `single`, `multiple` | which ratios the host computes for `corrected` |
-//! | ibl | `split-sum`, `matched`, `taps` | spec constant 23 (+ the matched cube, built when a pass needs it) |
+//! | ibl | `split-sum`, `matched`, `taps`, `anisotropic` | spec constant 23 (+ the matched cube, built when a pass needs it) |
 //!
 //! `mode` picks how much of the material the pipeline knows: nothing (`generic`, the talk's
 //! shader: parameters read at run time, arrays sized by `max_layers`), its structure
@@ -226,8 +226,9 @@ axis!(
         SplitSum = "split-sum",
         /// One fetch per lobe from a cube prefiltered with the lobe's own weighting at normal
         /// view (D·G2, the BRDF times the cosine), with more samples and no blur bias
-        /// (`tables::environment`), along the lobe's mean direction and at the mip of its
-        /// spread (`tables::lobe_moments`): the lobe matched in its first moment.
+        /// (`tables::environment`), where that cube's kernel comes closest to the lobe in L²
+        /// (`tables::lobe_fit`): the lean towards the normal and the mip that minimise the
+        /// mean squared error under a point light.
         Matched = "matched",
         /// Filtered importance sampling (Křivánek & Colbert 2008): [`IBL_TAP_COUNT`] directions
         /// through the lobe's visible normals, each read from the matched cube at the mip

@@ -39,6 +39,7 @@ use crate::shader::interface::LOBE_MOMENTS_SIZE;
 use crate::vk::{upload_image, Format, Image, ImageDesc, ImageState, ImageView};
 
 use super::lobe_albedo::MIN_MU;
+use super::lobe_fit::{fit, Kernels};
 use super::{filter_axis, Texels};
 
 /// Texels per side ([`LOBE_MOMENTS_SIZE`], which the shaders read too).
@@ -54,23 +55,23 @@ const SPREAD_POINTS: u32 = 8192;
 const SPREAD_SAMPLES: usize = 256;
 
 /// Bumped when the quadrature or the layout changes, so cached tables are rebuilt.
-const VERSION: u32 = 3;
+const VERSION: u32 = 4;
 
-/// Values per (μ, α): (w, √α′, √α″, up, down).
-const VALUES: usize = 5;
+/// Values per (μ, α): (w, √α′, √α″, up, down, w°, √α°).
+const VALUES: usize = 7;
 
 pub struct LobeMomentsTable {
     /// R32G32B32A32_SFLOAT, 2n × n, in `FragmentRead` state: (w, √α′, √α″, up) in the left
-    /// half, (down, 0, 0, 0) in the right.
+    /// half, (down, w°, √α°, 0) in the right.
     pub image: Image,
     pub view: ImageView,
     pub size: u32,
-    /// Row-major (row = roughness): (w, √α′, √α″, up, down) per (μ, α).
+    /// Row-major (row = roughness): (w, √α′, √α″, up, down, w°, √α°) per (μ, α).
     pub texels: Vec<[f32; VALUES]>,
 }
 
 impl LobeMomentsTable {
-    /// From the disk cache when there, else computed (about a second) and stored.
+    /// From the disk cache when there, else computed (several seconds) and stored.
     pub fn load_or_build(gpu: &Gpu) -> Result<Self> {
         let key = crate::cache::Key {
             kind: "lobe-moments",
@@ -99,12 +100,12 @@ impl LobeMomentsTable {
             size: SIZE,
             texels: flat
                 .chunks_exact(VALUES)
-                .map(|c| [c[0], c[1], c[2], c[3], c[4]])
+                .map(|c| [c[0], c[1], c[2], c[3], c[4], c[5], c[6]])
                 .collect(),
         })
     }
 
-    /// The CPU twin of the shaders' lookup: (w, √α′, √α″, up, down), bilinear over the
+    /// The CPU twin of the shaders' lookup: (w, √α′, √α″, up, down, w°, √α°), bilinear over the
     /// vertex-centred texels.
     pub fn sample(&self, mu: f64, alpha: f64) -> [f64; VALUES] {
         let n = self.size as usize;
@@ -112,7 +113,7 @@ impl LobeMomentsTable {
         let (i, fx) = filter_axis(mu.clamp(0.0, 1.0).sqrt(), n, Texels::Vertices);
         let (j, fy) = filter_axis(alpha.clamp(0.0, 1.0).sqrt(), n, Texels::Vertices);
         let lerp = |a: f64, b: f64, t: f64| a + (b - a) * t;
-        [0, 1, 2, 3, 4].map(|c| {
+        std::array::from_fn(|c| {
             let bottom = lerp(texel(i, j, c), texel(i + 1, j, c), fx);
             let top = lerp(texel(i, j + 1, c), texel(i + 1, j + 1, c), fx);
             lerp(bottom, top, fy)
@@ -121,12 +122,14 @@ impl LobeMomentsTable {
 }
 
 /// The image's RGBA texels from the flat values: per row, (w, √α′, √α″, up) at each μ, then
-/// (down, 0, 0, 0) at each μ.
+/// (down, w°, √α°, 0) at each μ.
 fn halves(flat: &[f32], size: usize) -> Vec<f32> {
     flat.chunks_exact(VALUES * size)
         .flat_map(|row| {
             let left = row.chunks_exact(VALUES).flat_map(|v| v[..4].to_vec());
-            let right = row.chunks_exact(VALUES).flat_map(|v| [v[4], 0.0, 0.0, 0.0]);
+            let right = row
+                .chunks_exact(VALUES)
+                .flat_map(|v| [v[4], v[5], v[6], 0.0]);
             left.chain(right).collect::<Vec<_>>()
         })
         .collect()
@@ -191,7 +194,7 @@ fn two_points(variance: f64, skew: f64) -> (f64, f64) {
 
 /// The weight w of normalize(mix(R, N, w)) that points `lean` radians from R towards N, R
 /// at `theta` radians from N.
-fn mix_weight(theta: f64, lean: f64) -> f64 {
+pub(super) fn mix_weight(theta: f64, lean: f64) -> f64 {
     if theta <= 1e-9 {
         return 0.0;
     }
@@ -255,7 +258,7 @@ fn variance_root_alpha(variance: &[f64], c: f64) -> f64 {
 
 /// √α′ whose normal-view lobe has resultant length `c`, read from `spread` (lengths at √α
 /// uniform on [0, 1], decreasing): the ends clamp.
-fn matched_root_alpha(spread: &[f64], c: f64) -> f64 {
+pub(super) fn matched_root_alpha(spread: &[f64], c: f64) -> f64 {
     let n = spread.len();
     if c >= spread[0] {
         return 0.0;
@@ -269,6 +272,11 @@ fn matched_root_alpha(spread: &[f64], c: f64) -> f64 {
     1.0
 }
 
+/// The normal-view resultant lengths [`matched_root_alpha`] reads.
+pub(super) fn spread_samples() -> Vec<f64> {
+    samples(normal_view_spread)
+}
+
 /// `statistic` (of α) at √α uniform on [0, 1].
 fn samples(statistic: fn(f64) -> f64) -> Vec<f64> {
     (0..SPREAD_SAMPLES)
@@ -279,11 +287,12 @@ fn samples(statistic: fn(f64) -> f64) -> Vec<f64> {
         .collect()
 }
 
-/// The values, flat (w, √α′, √α″, up, down) per (μ, α), rows split between the machine's
-/// cores.
+/// The values, flat (w, √α′, √α″, up, down, w°, √α°) per (μ, α), rows split between the
+/// machine's cores.
 fn compute(size: u32) -> Vec<f32> {
     use rayon::prelude::*;
-    let spread = samples(normal_view_spread);
+    let spread = spread_samples();
+    let kernels = Kernels::default();
     let variance = samples(normal_view_variance);
     (0..size * size)
         .into_par_iter()
@@ -302,7 +311,8 @@ fn compute(size: u32) -> Vec<f32> {
             let root = matched_root_alpha(&spread, m.length());
             let minor = variance_root_alpha(&variance, along.min(across));
             let (up, down) = two_points((along - across).max(0.0), skew);
-            [w, root, minor, up, down].map(|x| x as f32)
+            let (fit_w, fit_root) = fit(mu, root_alpha * root_alpha, &kernels);
+            [w, root, minor, up, down, fit_w, fit_root].map(|x| x as f32)
         })
         .collect()
 }

@@ -12,6 +12,7 @@ pub mod environment;
 pub mod fgd;
 pub mod fgd_study;
 pub mod lobe_albedo;
+pub mod lobe_fit;
 pub mod lobe_moments;
 pub mod split_sum;
 pub mod spot;

@@ -119,9 +119,9 @@ fn an_unknown_ibl_value_is_refused_by_name() {
 
 /// Under the studio environment, on gold (one GGX lobe, where the lighting's error is the
 /// whole error), the lighting's part of FLIP falls from the split sum to `matched` (the cube
-/// prefiltered with the lobe's weights, read along its mean direction at the mip of its
-/// spread) and again to `taps`, and from `matched` to `anisotropic` (its two fetches along
-/// the lobe's major axis): the orderings of one run, against one reference.
+/// prefiltered with the lobe's weights, read where its kernel comes closest to the lobe in
+/// L²) and again to `taps`, and from `matched` to `anisotropic` (its two fetches along the
+/// lobe's major axis): the orderings of one run, against one reference.
 #[test]
 fn under_the_studio_the_lighting_error_falls_from_split_sum_to_matched_to_taps() {
     use lamina::profile::bench::BenchConfig;

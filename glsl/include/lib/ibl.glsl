@@ -51,7 +51,9 @@ vec3 ibl_dominant_direction(vec3 n, vec3 r, float alpha) {
 // tangent axis as the lobe across its plane of incidence; w, `up`. The right half's x:
 // `down`. Two points at m̂ + up·t and m̂ − down·t (t: m̂'s tangent in the plane of incidence,
 // towards the normal), weighted down/(up + down) and up/(up + down), hold the rest of the
-// lobe's spread and its skew along t.
+// lobe's spread and its skew along t. The right half's y and z: `ibl=matched`'s fetch
+// (tables::lobe_fit), the w of normalize(mix(R, N, w)) and the √α′ of the matched cube's
+// kernel that come closest to the lobe in L².
 vec2 ibl_lobe_moments_at(float n_dot_v, float alpha) {
     vec2 at = vec2(sqrt(clamp(n_dot_v, 0.0, 1.0)), sqrt(clamp(alpha, 0.0, 1.0)));
     vec2 texels = vec2(2.0 * LOBE_MOMENTS_SIZE, LOBE_MOMENTS_SIZE);
@@ -64,6 +66,10 @@ vec4 ibl_lobe_moments(sampler2D table, float n_dot_v, float alpha) {
 
 float ibl_lobe_moments_down(sampler2D table, float n_dot_v, float alpha) {
     return textureLod(table, ibl_lobe_moments_at(n_dot_v, alpha) + vec2(0.5, 0.0), 0.0).x;
+}
+
+vec2 ibl_lobe_fit(sampler2D table, float n_dot_v, float alpha) {
+    return textureLod(table, ibl_lobe_moments_at(n_dot_v, alpha) + vec2(0.5, 0.0), 0.0).yz;
 }
 
 // The irradiance E(n) of an environment given by its order-2 spherical-harmonic coefficients,

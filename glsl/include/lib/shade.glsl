@@ -26,10 +26,11 @@ vec3 shade_behind(vec3 n, vec3 d) {
 }
 
 // One fetch of the environment for a lobe of roughness α around `r` (`behind`: mirrored):
-// `ibl=split-sum`, Karis's cube along Lagarde's dominant direction at the lobe's own mip; the
-// others, the matched cube along the lobe's mean direction at the mip of its spread
-// (lib/ibl.glsl's ibl_lobe_moments), `ibl=anisotropic` in two fetches that match its second
-// moments too. A mirror lobe reads mip 0 along `r` either way.
+// `ibl=split-sum`, Karis's cube along Lagarde's dominant direction at the lobe's own mip;
+// `ibl=matched`, the matched cube where its kernel comes closest to the lobe in L²
+// (lib/ibl.glsl's ibl_lobe_fit); the others, the matched cube along the lobe's mean
+// direction at the mip of its spread (ibl_lobe_moments), `ibl=anisotropic` in two fetches
+// that match its second moments too. A mirror lobe reads mip 0 along `r` either way.
 vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
     vec3 dir;
     float mip;
@@ -39,6 +40,10 @@ vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
     } else if (IBL == IBL_SPLIT_SUM) {
         dir = ibl_dominant_direction(n, r, alpha);
         mip = ibl_mip_of_alpha(alpha, frame.params.x);
+    } else if (IBL == IBL_MATCHED) {
+        vec2 fit = ibl_lobe_fit(lobe_moments, dot(n, r), alpha);
+        dir = mix(r, n, fit.x);
+        mip = ibl_mip_of_alpha(fit.y * fit.y, frame.params.x);
     } else {
         vec4 moments = ibl_lobe_moments(lobe_moments, dot(n, r), alpha);
         dir = mix(r, n, moments.x);
