@@ -1,6 +1,7 @@
-//! Where a GGX lobe looks and how wide it is: the table `ibl=matched` reads to place its one
-//! fetch of the matched cube (`tables::environment`, prefiltered with the lobe's own weights at
-//! a normal view).
+//! Where a GGX lobe looks and how wide it is: the table the matched cube's lookups read
+//! (`tables::environment`, prefiltered with the lobe's own weights at a normal view). `ibl=matched`
+//! reads its L² fit ([`lobe_fit`](super::lobe_fit)), stored here in spare channels; the moments
+//! place `ibl=anisotropic`'s fetches and `ibl=taps`' fallback fetch.
 //!
 //! At a normal view the lobe the cube was prefiltered with is the lobe itself. Away from it the
 //! lobe leans from the mirror direction R towards the normal N — its reflected directions are
@@ -8,7 +9,7 @@
 //! mean of its directions is 30° from R. The split sum reads its cube at R bent by Lagarde & de
 //! Rousiers' view-independent lerp (8° there). Here each (μ, α) gets the lobe's own first
 //! moment, the mean m of its reflected directions under the visible-normal distribution with
-//! the height-correlated G2/G1 weight: the fetch goes along m̂ (stored as the weight w of
+//! the height-correlated G2/G1 weight: a fetch goes along m̂ (stored as the weight w of
 //! normalize(mix(R, N, w)), which points there), at the mip of the α′ whose normal-view lobe
 //! has the same resultant length |m| (how concentrated its directions are; the von Mises-Fisher
 //! fit's statistic). One moment matched in direction and one in spread: the fetch is still
