@@ -19,7 +19,7 @@
 //! own samples (a product rule over GGX's sampler at a normal view, its radial variable
 //! warped towards the tail as in `lobe_moments`), with p in closed form, so a kernel
 //! sharper than the grid stays well posed. The search: a coarse grid over (lean, √α′), then
-//! three refinements around the best point.
+//! [`REFINEMENTS`] refinements around the best point.
 
 use glam::DVec3;
 
@@ -37,8 +37,11 @@ const KERNEL_GRID: u32 = 32;
 /// Side of the visible-normal grid on which the lobe's albedo is taken.
 const ALBEDO_GRID: u32 = 48;
 
-/// The smallest √α′ the search tries (α′ 0.0064).
-const MIN_ROOT: f64 = 0.08;
+/// Refinements of the search around its best point, each 2.5 times finer.
+const REFINEMENTS: u32 = 6;
+
+/// The smallest √α′ the search tries (α′ 1e-4, the models' smallest α).
+const MIN_ROOT: f64 = 0.01;
 
 /// The radial variable of a GGX sampler, warped towards the tail: u₁ = 1 − (1 − s)³ for s on
 /// a midpoint grid of `n`, with the warp's Jacobian.
@@ -47,8 +50,8 @@ fn warped(k: u32, n: u32) -> (f64, f64) {
     (1.0 - (1.0 - s).powi(3), 3.0 * (1.0 - s) * (1.0 - s))
 }
 
-/// ∫K² of the normalised kernel, per √α′ uniform on [0, 1] (index 0 holds the first
-/// positive sample's).
+/// ∫K² of the normalised kernel times α′² (which takes out its 1/α′² growth, leaving a
+/// smooth function), per √α′ uniform on [0, 1] (index 0 holds the first positive sample's).
 pub struct Kernels(Vec<f64>);
 
 impl Default for Kernels {
@@ -57,7 +60,7 @@ impl Default for Kernels {
             (0..KERNEL_SAMPLES)
                 .map(|k| {
                     let root = k.max(1) as f64 / (KERNEL_SAMPLES - 1) as f64;
-                    kernel_square(root * root)
+                    kernel_square(root * root) * root.powi(4)
                 })
                 .collect(),
         )
@@ -65,11 +68,14 @@ impl Default for Kernels {
 }
 
 impl Kernels {
-    /// The sample nearest √α′ = `root`, and that sample's √α′ and ∫K².
-    fn at(&self, root: f64) -> (f64, f64) {
-        let last = KERNEL_SAMPLES - 1;
-        let k = ((root * last as f64).round() as usize).clamp(1, last);
-        (k as f64 / last as f64, self.0[k])
+    /// ∫K² at √α′ = `root` (at least the first positive sample), interpolated linearly.
+    fn square(&self, root: f64) -> f64 {
+        let last = (KERNEL_SAMPLES - 1) as f64;
+        let x = root.clamp(1.0 / last, 1.0) * last;
+        let k = (x.floor() as usize).min(KERNEL_SAMPLES - 2);
+        let t = x - k as f64;
+        let scaled = self.0[k] + (self.0[k + 1] - self.0[k]) * t;
+        scaled / (x / last).powi(4)
     }
 }
 
@@ -127,7 +133,7 @@ pub fn fit(mu: f64, alpha: f64, kernels: &Kernels) -> (f64, f64) {
     let theta = mu.acos();
     // The mean squared error, less ∫p², of the kernel √α′ = `root` leaning `t`·θ from R.
     let error = |t: f64, root: f64| {
-        let (root, square) = kernels.at(root);
+        let square = kernels.square(root);
         let kernel_alpha = root * root;
         let angle = (t - 1.0) * theta;
         let d = DVec3::new(angle.sin(), 0.0, angle.cos());
@@ -168,7 +174,7 @@ pub fn fit(mu: f64, alpha: f64, kernels: &Kernels) -> (f64, f64) {
         }
     }
     let mut step = (1.0 / 8.0, 1.0 / 12.0);
-    for _ in 0..3 {
+    for _ in 0..REFINEMENTS {
         let (_, t, root) = best;
         for i in -2..=2 {
             for j in -2..=2 {
@@ -189,7 +195,7 @@ mod tests {
     #[test]
     fn a_normal_view_is_fitted_by_the_cubes_own_lobe() {
         let kernels = Kernels::default();
-        for alpha in [0.05, 0.2, 0.5] {
+        for alpha in [0.001, 0.004, 0.05, 0.2, 0.5] {
             let (w, root) = fit(1.0, alpha, &kernels);
             assert!(w < 1e-9, "{alpha}: w {w}");
             assert!(

@@ -56,7 +56,7 @@ const SPREAD_POINTS: u32 = 8192;
 const SPREAD_SAMPLES: usize = 256;
 
 /// Bumped when the quadrature or the layout changes, so cached tables are rebuilt.
-const VERSION: u32 = 4;
+const VERSION: u32 = 5;
 
 /// Values per (μ, α): (w, √α′, √α″, up, down, w°, √α°).
 const VALUES: usize = 7;
