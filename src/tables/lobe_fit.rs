@@ -45,7 +45,7 @@ const MIN_ROOT: f64 = 0.01;
 
 /// The radial variable of a GGX sampler, warped towards the tail: u₁ = 1 − (1 − s)³ for s on
 /// a midpoint grid of `n`, with the warp's Jacobian.
-fn warped(k: u32, n: u32) -> (f64, f64) {
+pub(super) fn warped(k: u32, n: u32) -> (f64, f64) {
     let s = (f64::from(k) + 0.5) / f64::from(n);
     (1.0 - (1.0 - s).powi(3), 3.0 * (1.0 - s) * (1.0 - s))
 }

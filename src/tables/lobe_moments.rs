@@ -40,7 +40,7 @@ use crate::shader::interface::LOBE_MOMENTS_SIZE;
 use crate::vk::{upload_image, Format, Image, ImageDesc, ImageState, ImageView};
 
 use super::lobe_albedo::MIN_MU;
-use super::lobe_fit::{fit, Kernels};
+use super::lobe_fit::{fit, warped, Kernels};
 use super::{filter_axis, Texels};
 
 /// Texels per side ([`LOBE_MOMENTS_SIZE`], which the shaders read too).
@@ -154,9 +154,7 @@ pub fn lobe_moments(mu: f64, alpha: f64) -> (DVec3, [f64; 3]) {
     let masked = 1.0 + smith_lambda(mu, alpha);
     let samples = || {
         (0..GRID).flat_map(move |a| {
-            let s = (f64::from(a) + 0.5) / f64::from(GRID);
-            let u1 = 1.0 - (1.0 - s).powi(3);
-            let jacobian = 3.0 * (1.0 - s) * (1.0 - s);
+            let (u1, jacobian) = warped(a, GRID);
             (0..GRID).filter_map(move |b| {
                 let u2 = (f64::from(b) + 0.5) / f64::from(GRID);
                 let l = reflect(v, sample_vndf(v, (u1, u2), alpha));
