@@ -11,7 +11,7 @@
 //!    built the same way the first time a pass needs it, from the source cube kept for it, but
 //!    weighs each sample by the lobe's own G2 at normal view (the BRDF times the cosine over
 //!    D's pdf), reads the source mip of its solid angle, and takes [`MATCHED_SAMPLES`] times
-//!    the samples.
+//!    the samples. Its levels are spaced in log α ([`matched_alpha_of_mip`]).
 
 use std::f64::consts::PI;
 
@@ -103,6 +103,19 @@ pub enum Weighting {
 
 /// The matched cube's samples per texel, as a multiple of [`EnvDesc::samples`].
 pub const MATCHED_SAMPLES: u32 = 4;
+
+/// The α of the matched cube's mip `mip` of `mip_count`: 0 at mip 0 (a mirror), 1/(M − 1)² at
+/// mip 1 (where Karis's cube has it) and, above, evenly spaced in log α up to 1 at the last
+/// mip. `lib/ibl.glsl`'s `ibl_matched_mip_of_alpha` is its inverse, and between mips 0 and 1
+/// reads √α·(M − 1) as Karis's cube does.
+pub fn matched_alpha_of_mip(mip: u32, mip_count: u32) -> f64 {
+    let last = f64::from(mip_count.max(2) - 1);
+    if mip == 0 {
+        return 0.0;
+    }
+    let steps = f64::from(mip_count.saturating_sub(2).max(1));
+    (last * last).powf((f64::from(mip) - last) / steps)
+}
 
 /// Largest finite half float: brighter texels (a bare sun) are clamped to it on upload.
 const HALF_MAX: f32 = 65504.0;
@@ -385,13 +398,16 @@ fn record_prefilter(
         ImageState::ComputeWrite,
     );
     for (mip, _, set) in targets {
-        let r = *mip as f32 / (desc.mip_count - 1) as f32;
         let (w, _, _) = cube.desc.mip_extent(*mip);
+        let alpha = match weighting {
+            Weighting::Karis => (*mip as f64 / (desc.mip_count - 1) as f64).powi(2),
+            Weighting::Matched => matched_alpha_of_mip(*mip, desc.mip_count),
+        };
         prefilter.record_dispatch(
             rec,
             &[set],
             &PrefilterPush {
-                alpha: r * r,
+                alpha: alpha as f32,
                 source_size: desc.face_size,
                 destination_size: w,
                 sample_count: match weighting {
@@ -609,6 +625,31 @@ mod tests {
             let d = cube_direction(face as u32, 0.5, 0.5);
             assert!((d - *axis).length() < 1e-12, "face {face}: {d}");
         }
+    }
+
+    #[test]
+    fn matched_levels_step_evenly_in_log_alpha_from_karis_first_level_to_one() {
+        for mip_count in [2, 5, 6, 7, 8, 10] {
+            let last = mip_count - 1;
+            let karis_first = (1.0 / f64::from(last)).powi(2);
+            assert_eq!(matched_alpha_of_mip(0, mip_count), 0.0);
+            assert!((matched_alpha_of_mip(1, mip_count) - karis_first).abs() < 1e-12);
+            assert!((matched_alpha_of_mip(last, mip_count) - 1.0).abs() < 1e-12);
+            let ratios: Vec<f64> = (1..last)
+                .map(|m| {
+                    matched_alpha_of_mip(m + 1, mip_count) / matched_alpha_of_mip(m, mip_count)
+                })
+                .collect();
+            for r in &ratios {
+                assert!(
+                    (r - ratios[0]).abs() < 1e-9 && *r > 1.0,
+                    "{mip_count}: {ratios:?}"
+                );
+            }
+        }
+        // Eight levels: about twice α a level, where √α steps quadruple mip 1's α at mip 2.
+        let ratio = matched_alpha_of_mip(2, 8) / matched_alpha_of_mip(1, 8);
+        assert!((ratio - 49f64.powf(1.0 / 6.0)).abs() < 1e-12 && ratio < 2.0);
     }
 
     #[test]

@@ -5,15 +5,24 @@
 
 #include "math.glsl"
 
-// The one roughness ↔ mip mapping, used by the prefilter pass and by every lookup:
-// perceptual roughness r = √α = mip / (mip_count − 1).
-float ibl_alpha_of_mip(float mip, float mip_count) {
-    float r = mip / max(mip_count - 1.0, 1.0);
-    return r * r;
-}
-
+// Karis's cube's roughness ↔ mip mapping, used by its prefilter pass and by the split sum's
+// lookup: perceptual roughness r = √α = mip / (mip_count − 1).
 float ibl_mip_of_alpha(float alpha, float mip_count) {
     return sqrt(clamp(alpha, 0.0, 1.0)) * (mip_count - 1.0);
+}
+
+// The matched cube's levels (tables::environment::matched_alpha_of_mip, the prefilter's twin):
+// mip 0 a mirror, mip 1 at α₁ = 1/(mip_count − 1)², where Karis's cube has it, and the
+// levels above spaced evenly in log α up to α = 1 at the last — about twice α a level with
+// 8 levels, where √α steps put mips 1 and 2 at α 0.020 and 0.082, whose blend has twice a
+// lobe's GGX tail between them. Below α₁ the lookup reads between mips 0 and 1 as Karis's.
+float ibl_matched_mip_of_alpha(float alpha, float mip_count) {
+    float last = max(mip_count - 1.0, 1.0);
+    float a = clamp(alpha, 0.0, 1.0);
+    if (a * last * last <= 1.0) {
+        return sqrt(a) * last;
+    }
+    return last + max(mip_count - 2.0, 0.0) * log(a) / max(2.0 * log(last), 1e-6);
 }
 
 // A lobe of α at most the models' smallest (a smooth layer's, HG_MIN_ALPHA) is a mirror to

@@ -43,7 +43,7 @@ vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
     } else if (IBL == IBL_MATCHED) {
         vec2 fit = ibl_lobe_fit(lobe_moments, dot(n, r), alpha);
         dir = mix(r, n, fit.x);
-        mip = ibl_mip_of_alpha(fit.y * fit.y, frame.params.x);
+        mip = ibl_matched_mip_of_alpha(fit.y * fit.y, frame.params.x);
     } else {
         vec4 moments = ibl_lobe_moments(lobe_moments, dot(n, r), alpha);
         dir = mix(r, n, moments.x);
@@ -58,11 +58,11 @@ vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
             float q = down / max(up + down, 1e-6);
             vec3 d0 = behind ? shade_behind(n, m + up * t) : m + up * t;
             vec3 d1 = behind ? shade_behind(n, m - down * t) : m - down * t;
-            float minor = ibl_mip_of_alpha(moments.z * moments.z, frame.params.x);
+            float minor = ibl_matched_mip_of_alpha(moments.z * moments.z, frame.params.x);
             return q * textureLod(matched, d0, minor).rgb
                 + (1.0 - q) * textureLod(matched, d1, minor).rgb;
         }
-        mip = ibl_mip_of_alpha(moments.y * moments.y, frame.params.x);
+        mip = ibl_matched_mip_of_alpha(moments.y * moments.y, frame.params.x);
     }
     dir = behind ? shade_behind(n, dir) : dir;
     return IBL == IBL_SPLIT_SUM ? textureLod(prefiltered, dir, mip).rgb
@@ -99,7 +99,8 @@ vec3 lobe_taps(vec3 n, vec3 r, float alpha, bool behind) {
         float share = 1.0 / (float(IBL_TAP_COUNT) * pdf);
         vec3 d = frame_of_n * l;
         d = behind ? shade_behind(n, d) : d;
-        sum += w * textureLod(matched, d, ibl_mip_of_alpha(sqrt(share / (4.0 * PI)), mips)).rgb;
+        float mip = ibl_matched_mip_of_alpha(sqrt(share / (4.0 * PI)), mips);
+        sum += w * textureLod(matched, d, mip).rgb;
         total += w;
     }
     return total > 0.0 ? sum / total : lobe_fetch(n, r, alpha, behind);
