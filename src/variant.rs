@@ -230,8 +230,8 @@ axis!(
         /// (`tables::lobe_fit`): the lean towards the normal and the mip that minimise the
         /// mean squared error under a point light.
         Matched = "matched",
-        /// Filtered importance sampling (Křivánek & Colbert 2008): [`IBL_TAP_COUNT`] directions
-        /// through the lobe's visible normals, each read from the matched cube at the mip
+        /// Filtered importance sampling (Křivánek & Colbert 2008): `taps` directions (default
+        /// [`IBL_TAP_COUNT`]) through the lobe's visible normals, each read from the matched cube at the mip
         /// whose blur covers its share of the lobe, weighted G2/G1.
         Taps = "taps",
         /// Two fetches of the matched cube, the lobe matched in its first and second moments
@@ -285,8 +285,12 @@ axis!(
     }
 );
 
-/// The directions `ibl=taps` reads per lobe.
+/// The directions `ibl=taps` reads per lobe unless `taps` says otherwise.
 pub const IBL_TAP_COUNT: u32 = 32;
+
+/// The most directions `taps` may ask of `ibl=taps` per lobe: the count rides in the `ibl`
+/// specialization constant's bits above its code ([`VariantKey::spec`]).
+pub const IBL_TAP_LIMIT: u32 = 4096;
 
 impl Mode {
     /// Whether a pipeline of this mode is built for one material.
@@ -312,6 +316,8 @@ pub struct VariantKey {
     pub interfaces: Interfaces,
     /// How the environment lights each lobe.
     pub ibl: Ibl,
+    /// The directions `ibl=taps` reads per lobe ([`IBL_TAP_COUNT`] unless another `ibl` value).
+    pub taps: u32,
     /// Where the stack is shaded: the mesh's fragment shader, or compute over a G-buffer.
     pub path: ShadePath,
     /// How the deferred path sends pixels to its pipelines (`none` on the forward path).
@@ -334,6 +340,7 @@ impl Default for VariantKey {
             transport: Transport::Paper,
             interfaces: Interfaces::Single,
             ibl: Ibl::SplitSum,
+            taps: IBL_TAP_COUNT,
             path: ShadePath::Forward,
             classify: Classify::None,
             channels: Channels::Rgb,
@@ -353,6 +360,7 @@ pub const AXES: &[&str] = &[
     "transport",
     "interfaces",
     "ibl",
+    "taps",
     "path",
     "classify",
     "channels",
@@ -438,7 +446,7 @@ pub struct ShadeSpec {
     /// forward pass shades the transmitted lobe; 0 folds its code away. Set per material for
     /// the forward pass, always for the GPU evaluator's generic kernel.
     pub transmits: u32,
-    /// The `ibl` axis (id 23).
+    /// The `ibl` axis (id 23): its code in the low byte, `taps` above.
     pub ibl: u32,
     /// A varying stack's class pass (`render::classes`): the slots whose maps carry a value
     /// across one of the model's tests, which the pass makes at run time (id 24).
@@ -518,7 +526,7 @@ impl VariantKey {
             lights: 0,
             transport: self.transport.code(),
             transmits: 0,
-            ibl: self.ibl.code(),
+            ibl: self.ibl.code() | self.taps << 8,
             dynamic_mask: 0,
             layer_slots_lo: 0,
             layer_slots_hi: 0,
@@ -566,6 +574,9 @@ impl fmt::Display for VariantKey {
         }
         if self.ibl != Ibl::SplitSum {
             write!(f, ",ibl={}", self.ibl)?;
+        }
+        if self.taps != IBL_TAP_COUNT {
+            write!(f, ",taps={}", self.taps)?;
         }
         if self.path != ShadePath::Forward {
             write!(f, ",path={}", self.path)?;
@@ -672,6 +683,17 @@ impl VariantKey {
                 "transport" => key.transport = Transport::parse_value(value)?,
                 "interfaces" => key.interfaces = Interfaces::parse_value(value)?,
                 "ibl" => key.ibl = Ibl::parse_value(value)?,
+                "taps" => {
+                    key.taps = value
+                        .parse()
+                        .ok()
+                        .filter(|n| (1..=IBL_TAP_LIMIT).contains(n))
+                        .ok_or_else(|| VariantError::BadValue {
+                            key: axis.into(),
+                            value: value.into(),
+                            allowed: format!("an integer in 1..={IBL_TAP_LIMIT}"),
+                        })?
+                }
                 "path" => key.path = ShadePath::parse_value(value)?,
                 "classify" => key.classify = Classify::parse_value(value)?,
                 "channels" => key.channels = Channels::parse_value(value)?,
@@ -683,6 +705,14 @@ impl VariantKey {
                 }
             }
             seen.push(AXES.iter().find(|a| **a == axis).expect("matched above"));
+        }
+        if key.taps != IBL_TAP_COUNT && key.ibl != Ibl::Taps {
+            return Err(VariantError::Needs {
+                given: format!("taps={}", key.taps),
+                needs: "ibl=taps",
+                why: "it is how many directions `ibl=taps` reads per lobe; the other values \
+                      read one or two",
+            });
         }
         if key.classify != Classify::None && key.path != ShadePath::Deferred {
             return Err(VariantError::Needs {
@@ -743,6 +773,29 @@ mod tests {
     }
 
     #[test]
+    fn taps_counts_ibl_taps_directions_and_needs_it() {
+        let key: VariantKey = "model=tm2,ibl=taps,taps=128".parse().unwrap();
+        assert_eq!(key.taps, 128);
+        assert_eq!(key.spec().ibl, Ibl::Taps.code() | 128 << 8);
+        assert!(key.to_string().ends_with(",ibl=taps,taps=128"), "{key}");
+        let default: VariantKey = "model=tm2,ibl=taps,taps=32".parse().unwrap();
+        assert!(default.to_string().ends_with(",ibl=taps"), "{default}");
+        let e = "model=tm2,ibl=matched,taps=64"
+            .parse::<VariantKey>()
+            .unwrap_err();
+        assert!(
+            e.to_string().starts_with("`taps=64` needs `ibl=taps`"),
+            "{e}"
+        );
+        for bad in ["0", "4097", "-1", "many"] {
+            let e = format!("ibl=taps,taps={bad}")
+                .parse::<VariantKey>()
+                .unwrap_err();
+            assert!(e.to_string().contains("1..=4096"), "{e}");
+        }
+    }
+
+    #[test]
     fn classify_needs_the_deferred_path() {
         let key: VariantKey = "model=tm2,classify=pixels,path=deferred".parse().unwrap();
         assert!(
@@ -794,6 +847,14 @@ mod tests {
                                                 transport,
                                                 interfaces,
                                                 ibl: Ibl::VALUES[keys.len() % Ibl::VALUES.len()].1,
+                                                taps: if Ibl::VALUES[keys.len() % Ibl::VALUES.len()]
+                                                    .1
+                                                    == Ibl::Taps
+                                                {
+                                                    1 + keys.len() as u32 % IBL_TAP_LIMIT
+                                                } else {
+                                                    IBL_TAP_COUNT
+                                                },
                                                 path: ShadePath::VALUES
                                                     [keys.len() % ShadePath::VALUES.len()]
                                                 .1,

@@ -199,7 +199,6 @@ fn codes_glsl() -> String {
     axis::<Transport>(&mut out);
     axis::<Ibl>(&mut out);
     for (name, value) in [
-        ("IBL_TAP_COUNT", crate::variant::IBL_TAP_COUNT),
         ("TM6_LOBES_PER_LAYER", crate::model::TM6_LOBES_PER_LAYER),
         ("TM6_LOBES_LESS", crate::model::TM6_LOBES_LESS),
     ] {

@@ -13,6 +13,7 @@ use crate::model::LayerParams;
 use crate::render::scene::Camera;
 use crate::variant::{
     Axis, Channels, Classify, Fgd, Ibl, Mode, Model, Ndf, ShadePath, Tir, VariantKey, G2,
+    IBL_TAP_COUNT, IBL_TAP_LIMIT,
 };
 
 use super::layer_edit::{
@@ -316,6 +317,15 @@ impl Panels {
         choose(ui, "mode", &mut v.mode, Mode::VALUES);
         // How the environment lights each lobe (matched and taps build a second cube once).
         choose(ui, "ibl", &mut v.ibl, Ibl::VALUES);
+        if v.ibl == Ibl::Taps {
+            ui.add(
+                Slider::new(&mut v.taps, 1..=IBL_TAP_LIMIT)
+                    .logarithmic(true)
+                    .text("taps per lobe"),
+            );
+        } else {
+            v.taps = IBL_TAP_COUNT;
+        }
         // Fragment shading, or a G-buffer then compute.
         choose(ui, "path", &mut v.path, ShadePath::VALUES);
         // The deferred path's pixels to their pipelines: all at once, by tile, or by pixel.
