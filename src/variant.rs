@@ -613,6 +613,19 @@ impl FromStr for VariantKey {
     }
 }
 
+/// An axis's count `value`: an integer in 1..=`limit`.
+fn parse_count(axis: &str, value: &str, limit: u32) -> Result<u32, VariantError> {
+    value
+        .parse()
+        .ok()
+        .filter(|n| (1..=limit).contains(n))
+        .ok_or_else(|| VariantError::BadValue {
+            key: axis.into(),
+            value: value.into(),
+            allowed: format!("an integer in 1..={limit}"),
+        })
+}
+
 impl VariantKey {
     /// Whether this key has every axis value `pattern` names (`model=tm6,fp16=on`), as the
     /// key prints them.
@@ -651,17 +664,7 @@ impl VariantKey {
             }
             match axis {
                 "model" => key.model = Model::parse_value(value)?,
-                "max_layers" => {
-                    key.max_layers = value
-                        .parse()
-                        .ok()
-                        .filter(|n| (1..=MAX_LAYERS_LIMIT).contains(n))
-                        .ok_or_else(|| VariantError::BadValue {
-                            key: axis.into(),
-                            value: value.into(),
-                            allowed: format!("an integer in 1..={MAX_LAYERS_LIMIT}"),
-                        })?
-                }
+                "max_layers" => key.max_layers = parse_count(axis, value, MAX_LAYERS_LIMIT)?,
                 "fp16" => {
                     key.fp16 = match value {
                         "on" => true,
@@ -683,17 +686,7 @@ impl VariantKey {
                 "transport" => key.transport = Transport::parse_value(value)?,
                 "interfaces" => key.interfaces = Interfaces::parse_value(value)?,
                 "ibl" => key.ibl = Ibl::parse_value(value)?,
-                "taps" => {
-                    key.taps = value
-                        .parse()
-                        .ok()
-                        .filter(|n| (1..=IBL_TAP_LIMIT).contains(n))
-                        .ok_or_else(|| VariantError::BadValue {
-                            key: axis.into(),
-                            value: value.into(),
-                            allowed: format!("an integer in 1..={IBL_TAP_LIMIT}"),
-                        })?
-                }
+                "taps" => key.taps = parse_count(axis, value, IBL_TAP_LIMIT)?,
                 "path" => key.path = ShadePath::parse_value(value)?,
                 "classify" => key.classify = Classify::parse_value(value)?,
                 "channels" => key.channels = Channels::parse_value(value)?,
