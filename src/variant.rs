@@ -239,6 +239,11 @@ axis!(
         /// major axis, each blurred as much as the lobe spreads across that axis. A grazing
         /// lobe, narrower across the plane of incidence than along it, keeps that shape.
         Anisotropic = "anisotropic",
+        /// The environment's lamps taken out of the map (`tables::lamps`: its small regions
+        /// far brighter than its mean) and lit as disk lights, each lobe evaluated at each
+        /// lamp as an analytic light is (the pass holds them as constants); the rest read as
+        /// the split sum reads the map, from Karis's cube of the map without them.
+        Lamps = "lamps",
     }
 );
 
@@ -461,6 +466,9 @@ pub struct ShadeSpec {
     pub slot_maps: [u32; 4],
     /// `specialized-values`: the layers' values (see [`LAYER_VALUES`]).
     pub values: [[f32; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
+    /// `ibl=lamps`: the environment's lamps (`tables::lamps::lamp_values`; ids from
+    /// [`LAMP_ID_BASE`]).
+    pub lamps: [f32; LAMP_VALUES],
 }
 
 impl Default for ShadeSpec {
@@ -472,12 +480,25 @@ impl Default for ShadeSpec {
 const AXIS_ENTRIES: usize = 32;
 const VALUE_ENTRIES: usize = (MAX_LAYERS_LIMIT * VALUES_PER_LAYER) as usize;
 
-const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENTRIES] {
+/// Lamp slots an `ibl=lamps` pass holds (`tables::lamps::MAX_LAMPS`).
+pub const LAMP_SLOTS: usize = 4;
+
+/// Specialization constants an `ibl=lamps` pass holds its environment's lamps in: two
+/// vectors per slot (`tables::lamps::lamp_values`, `generated/layer_values.glsl`'s
+/// `ibl_lamp`).
+pub const LAMP_VALUES: usize = 8 * LAMP_SLOTS;
+
+/// The first id of the lamps' constants, after the layers' values.
+pub const LAMP_ID_BASE: u32 = VALUE_ID_BASE + VALUE_ENTRIES as u32;
+
+const SPEC_ENTRIES: usize = AXIS_ENTRIES + VALUE_ENTRIES + LAMP_VALUES;
+
+const fn shade_spec_entries() -> [crate::vk::SpecEntry; SPEC_ENTRIES] {
     let mut out = [crate::vk::SpecEntry {
         id: 0,
         offset: 0,
         size: 4,
-    }; AXIS_ENTRIES + VALUE_ENTRIES];
+    }; SPEC_ENTRIES];
     // ids 0…31 are the u32 fields in declaration order, 4 bytes apart from offset 0.
     let mut i = 0;
     while i < AXIS_ENTRIES {
@@ -490,6 +511,13 @@ const fn shade_spec_entries() -> [crate::vk::SpecEntry; AXIS_ENTRIES + VALUE_ENT
         out[AXIS_ENTRIES + v].id = VALUE_ID_BASE + v as u32;
         out[AXIS_ENTRIES + v].offset = std::mem::offset_of!(ShadeSpec, values) + 4 * v;
         v += 1;
+    }
+    let mut l = 0;
+    while l < LAMP_VALUES {
+        out[AXIS_ENTRIES + VALUE_ENTRIES + l].id = LAMP_ID_BASE + l as u32;
+        out[AXIS_ENTRIES + VALUE_ENTRIES + l].offset =
+            std::mem::offset_of!(ShadeSpec, lamps) + 4 * l;
+        l += 1;
     }
     out
 }
@@ -533,6 +561,7 @@ impl VariantKey {
             mark_layer: 0,
             slot_maps: [0; 4],
             values: [[0.0; VALUES_PER_LAYER as usize]; MAX_LAYERS_LIMIT as usize],
+            lamps: [0.0; LAMP_VALUES],
         }
     }
 
@@ -924,10 +953,13 @@ mod tests {
     }
 
     #[test]
-    fn spec_entries_are_the_fields_in_order_then_the_values() {
+    fn spec_entries_are_the_fields_in_order_then_the_values_then_the_lamps() {
         use crate::vk::SpecConstants;
         let entries = ShadeSpec::ENTRIES;
-        assert_eq!(entries.len(), AXIS_ENTRIES + VALUE_ENTRIES);
+        assert_eq!(entries.len(), AXIS_ENTRIES + VALUE_ENTRIES + LAMP_VALUES);
+        let first_lamp = &entries[AXIS_ENTRIES + VALUE_ENTRIES];
+        assert_eq!(first_lamp.id, LAMP_ID_BASE);
+        assert_eq!(first_lamp.offset, std::mem::offset_of!(ShadeSpec, lamps));
         assert_eq!(entries[7].offset, std::mem::offset_of!(ShadeSpec, mode));
         assert_eq!(
             entries[17].offset,
@@ -947,7 +979,7 @@ mod tests {
             std::mem::offset_of!(ShadeSpec, layer_slots_lo)
         );
         let last = entries.last().unwrap();
-        assert_eq!(last.id, VALUE_ID_BASE + VALUE_ENTRIES as u32 - 1);
+        assert_eq!(last.id, LAMP_ID_BASE + LAMP_VALUES as u32 - 1);
         assert_eq!(last.offset + last.size, std::mem::size_of::<ShadeSpec>());
     }
 

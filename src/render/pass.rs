@@ -16,7 +16,8 @@ use crate::model::{ends_diffuse, ends_transmissive, LayerParams};
 use crate::shader::specialize::{
     check_generic_fit, specialize_values, BakedShape, SpecializeError, Structure,
 };
-use crate::variant::{Mode, Model, ShadeSpec, Transport, VariantKey};
+
+use crate::variant::{Mode, Model, ShadeSpec, Transport, VariantKey, LAMP_VALUES};
 
 use super::classes::{Class, Routing};
 use super::forward::ForwardPass;
@@ -61,6 +62,9 @@ pub struct PassKey {
     pub transmits: bool,
     /// The scene has analytic lights (`LIGHTS`).
     pub lights: bool,
+    /// `ibl=lamps`: the environment's lamps (`tables::lamps::lamp_values`), which the
+    /// renderer sets when it builds the pass; zero otherwise.
+    pub lamps: [f32; LAMP_VALUES],
 }
 
 impl PassKey {
@@ -113,6 +117,7 @@ impl PassKey {
                     diffuse: ends_diffuse(layers),
                     transmits: ends_transmissive(layers),
                     lights: !lighting.lights.is_empty(),
+                    lamps: [0.0; LAMP_VALUES],
                 });
             }
             let structure =
@@ -135,6 +140,7 @@ impl PassKey {
             diffuse: ends_diffuse(layers),
             transmits: ends_transmissive(layers),
             lights: !lighting.lights.is_empty(),
+            lamps: [0.0; LAMP_VALUES],
         })
     }
 
@@ -160,6 +166,7 @@ impl PassKey {
             diffuse: ends_diffuse(layers),
             transmits: ends_transmissive(layers),
             lights: !lighting.lights.is_empty(),
+            lamps: [0.0; LAMP_VALUES],
         }
     }
 
@@ -179,6 +186,7 @@ impl PassKey {
             diffuse: ends_diffuse(layers),
             transmits: ends_transmissive(layers),
             lights: !lighting.lights.is_empty(),
+            lamps: [0.0; LAMP_VALUES],
         }
     }
 
@@ -226,6 +234,7 @@ impl PassKey {
         spec.diffuse_base = u32::from(self.diffuse);
         spec.transmits = u32::from(self.transmits);
         spec.lights = u32::from(self.lights);
+        spec.lamps = self.lamps;
         spec
     }
 
@@ -336,8 +345,13 @@ impl PassCache {
     }
 
     /// The pass of `key`, prepared on `renderer` the first time it is asked for.
+    /// A pass that holds lamps other than the renderer's environment's (`ibl=lamps`, after
+    /// `Renderer::set_environment`) is prepared again.
     pub fn get(&mut self, renderer: &mut Renderer<'_>, key: &PassKey) -> Result<&ForwardPass> {
-        match self.passes.iter().position(|p| p.key == *key) {
+        let lamps = renderer.lamps_of(key.variant);
+        self.passes
+            .retain(|p| !(requested(p, key) && p.key.lamps != lamps));
+        match self.passes.iter().position(|p| requested(p, key)) {
             Some(i) => {
                 let pass = self.passes.remove(i);
                 self.passes.push(pass);
@@ -357,8 +371,18 @@ impl PassCache {
 
     /// The pass of `key`, if prepared.
     pub fn find(&self, key: &PassKey) -> Option<&ForwardPass> {
-        self.passes.iter().find(|p| p.key == *key)
+        self.passes.iter().find(|p| requested(p, key))
     }
+}
+
+/// Whether `pass` was prepared for `key`: the same key but for the lamps, which the renderer
+/// sets.
+fn requested(pass: &ForwardPass, key: &PassKey) -> bool {
+    pass.key.variant == key.variant
+        && PassKey {
+            lamps: key.lamps,
+            ..pass.key.clone()
+        } == *key
 }
 
 #[cfg(test)]

@@ -37,6 +37,7 @@ use super::pass::{MaterialKey, PassKey};
 use super::scene::{uv_sphere, Camera, Mesh};
 use super::sky::SkyPass;
 use super::surface::SurfaceTexture;
+use crate::tables::lamps::{lamp_values, LAMP_VALUES};
 
 /// The render target's format: linear HDR RGBA.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -219,10 +220,14 @@ impl<'g> Renderer<'g> {
     /// Replaces the environment (prefiltered from `equirect` per `env`).
     pub fn set_environment(&mut self, equirect: &HdrImage, env: EnvDesc) -> Result<()> {
         let matched = self.environment.matched_view().is_some();
+        let lamps = self.environment.lamps_view().is_some();
         self.environment = Environment::build(self.gpu, equirect, env)?;
-        // The passes prepared so far may read the matched cube.
+        // The passes prepared so far may read the matched cube, or the one without lamps.
         if matched {
             self.environment.build_matched(self.gpu)?;
+        }
+        if lamps {
+            self.environment.build_lamps(self.gpu)?;
         }
         Ok(())
     }
@@ -272,8 +277,10 @@ impl<'g> Renderer<'g> {
     pub fn prepare_baked(&mut self, key: &PassKey, baked_size: u32) -> Result<ForwardPass> {
         let variant = key.variant;
         self.inputs.prepare(variant)?;
-        if variant.ibl != Ibl::SplitSum {
-            self.environment.build_matched(self.gpu)?;
+        match variant.ibl {
+            Ibl::SplitSum => {}
+            Ibl::Lamps => self.environment.build_lamps(self.gpu)?,
+            _ => self.environment.build_matched(self.gpu)?,
         }
         let baked = match (variant.mode, key.layers()) {
             (Mode::Baked, Some(layers)) => {
@@ -328,7 +335,12 @@ impl<'g> Renderer<'g> {
         Ok(())
     }
 
-    fn pass(&self, key: PassKey, baked: Option<(BakedTable, BakedTexture)>) -> Result<ForwardPass> {
+    fn pass(
+        &self,
+        mut key: PassKey,
+        baked: Option<(BakedTable, BakedTexture)>,
+    ) -> Result<ForwardPass> {
+        key.lamps = self.lamps_of(key.variant);
         ForwardPass::new(
             self.gpu,
             &self.layout,
@@ -577,8 +589,23 @@ impl<'g> Renderer<'g> {
 
     /// Errs unless `pass` shades `layers` with the maps set by [`Renderer::set_surface`] and
     /// the renderer's lighting: each of them compiled into the pass (its [`PassKey`]).
+    /// The environment's lamps as a pass of `variant` holds them (`ibl=lamps`; none else).
+    pub fn lamps_of(&self, variant: VariantKey) -> [f32; LAMP_VALUES] {
+        match variant.ibl {
+            Ibl::Lamps => lamp_values(self.environment.lamps()),
+            _ => [0.0; LAMP_VALUES],
+        }
+    }
+
     fn check_pass(&self, pass: &ForwardPass, layers: &[LayerParams]) -> Result<()> {
         pass.key.admits(layers)?;
+        if pass.key.lamps != self.lamps_of(pass.key.variant) {
+            return Err(Error::Unsupported(format!(
+                "this pass ({}) holds the lamps of another environment than the renderer's: \
+                 prepare it again after setting the environment",
+                pass.key.variant
+            )));
+        }
         if let (Some(surface), MaterialKey::Classes(_)) = (self.current_surface, &pass.key.material)
         {
             pass.key
@@ -719,12 +746,16 @@ impl<'g> Renderer<'g> {
             self.surface_texture().map(|t| &t.view),
             "shading",
         )?;
-        let matched = match self.environment.matched_view() {
+        let cube = match pass.key.variant.ibl {
+            Ibl::Lamps => self.environment.lamps_view(),
+            _ => self.environment.matched_view(),
+        };
+        let matched = match cube {
             Some(view) => view,
             None if pass.key.variant.ibl == Ibl::SplitSum => &self.environment.view,
             None => {
                 return Err(Error::Unsupported(format!(
-                    "the pass of {} reads the matched environment cube, which this renderer \
+                    "the pass of {} reads a matched environment cube, which this renderer \
                      has not built: prepare the pass with this renderer",
                     pass.key.variant
                 )))

@@ -141,9 +141,15 @@ const GENERATED_LAYER_VALUES: &str = "include/generated/layer_values.glsl";
 
 /// The numeric parameters of every layer as specialization constants
 /// (`LAYER<i>_<FIELD>`, ids from `variant::VALUE_ID_BASE`), and `tm_layer_values(i)`, the
-/// layer they make: what `mode=specialized-values` reads instead of the material buffer.
+/// layer they make: what `mode=specialized-values` reads instead of the material buffer. Then
+/// the environment's lamps (`IBL_LAMP_<v>`, ids from `variant::LAMP_ID_BASE`) and
+/// `ibl_lamp(i)`, their i-th vector: what `ibl=lamps` lights with (`tables::lamps`). On
+/// lavapipe a constant costs nothing to read, where each vector of a uniform buffer costs
+/// about 25 instructions a pixel.
 fn layer_values_glsl() -> String {
-    use crate::variant::{LAYER_VALUES, MAX_LAYERS_LIMIT, VALUES_PER_LAYER, VALUE_ID_BASE};
+    use crate::variant::{
+        LAMP_ID_BASE, LAMP_VALUES, LAYER_VALUES, MAX_LAYERS_LIMIT, VALUES_PER_LAYER, VALUE_ID_BASE,
+    };
     let mut out = String::from(
         "// Written by src/shader/compiler.rs from src/variant.rs (LAYER_VALUES). Needs\n\
          // shared/material.glsl's LayerGpu.\n\
@@ -170,7 +176,21 @@ fn layer_values_glsl() -> String {
             v(["SIGMA_A_R", "SIGMA_A_G", "SIGMA_A_B"]),
         ));
     }
-    out.push_str("    }\n    return material.layers[i];\n}\n#endif\n");
+    out.push_str("    }\n    return material.layers[i];\n}\n");
+    for v in 0..LAMP_VALUES {
+        let id = LAMP_ID_BASE + v as u32;
+        out.push_str(&format!(
+            "layout(constant_id = {id}) const float IBL_LAMP_{v} = 0.0;\n"
+        ));
+    }
+    out.push_str("vec4 ibl_lamp(uint i) {\n    switch (i) {\n");
+    for i in 0..LAMP_VALUES / 4 {
+        let v = (0..4)
+            .map(|c| format!("IBL_LAMP_{}", 4 * i + c))
+            .collect::<Vec<_>>();
+        out.push_str(&format!("    case {i}u: return vec4({});\n", v.join(", ")));
+    }
+    out.push_str("    }\n    return vec4(0.0);\n}\n#endif\n");
     out
 }
 
@@ -204,6 +224,10 @@ fn codes_glsl() -> String {
     ] {
         out.push_str(&format!("#define {name} {value}u\n"));
     }
+    out.push_str(&format!(
+        "#define IBL_LAMP_COUNT {}u\n",
+        crate::variant::LAMP_SLOTS
+    ));
     for (name, value) in [
         ("TM_INDEX_MATCHED", crate::model::INDEX_MATCHED),
         ("TM_REFLECTS_NOTHING", crate::model::REFLECTS_NOTHING),

@@ -12,6 +12,9 @@
 //!    weighs each sample by the lobe's own G2 at normal view (the BRDF times the cosine over
 //!    D's pdf), reads the source mip of its solid angle, and takes [`MATCHED_SAMPLES`] times
 //!    the samples. Its levels are spaced in log α ([`matched_alpha_of_mip`]).
+//! 4. The lamps' cube (`ibl=lamps`) is built the first time a pass needs it: the map without
+//!    its lamps ([`crate::tables::lamps`]) converted to a source cube of its own and
+//!    prefiltered as Karis's, its mip 0 the whole map's (a mirror lobe reads the lamps there).
 
 use std::f64::consts::PI;
 
@@ -22,6 +25,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::imageio::HdrImage;
 use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_2D};
+use crate::tables::lamps::{self, equirect_direction, texel_solid_angle, Lamp, Lamps};
 use crate::vk::{
     submit_and_wait, upload_image, BindingKind, Buffer, BufferUsageFlags, DescriptorSet, Format,
     Image, ImageDesc, ImageState, ImageUsageFlags, ImageView, Recorder, Resource, Sampler,
@@ -126,6 +130,10 @@ pub struct Environment {
     pub view: ImageView,
     /// The same, [`Weighting::Matched`], once [`Environment::build_matched`] built it.
     matched: Option<(Image, ImageView)>,
+    /// The map split into its lamps and the rest (`ibl=lamps`).
+    lamps: Lamps,
+    /// Karis's cube of the rest, once [`Environment::build_lamps`] built it.
+    lamps_cube: Option<(Image, ImageView)>,
     /// The source cube (every mip, `ComputeRead`), kept for the matched cube.
     source: Image,
     source_view: ImageView,
@@ -148,41 +156,12 @@ impl Environment {
             )));
         }
         let device = &gpu.device;
-        let size = desc.face_size;
-
-        let (_source_2d, source_2d_view) = upload_equirect(gpu, equirect)?;
-        let equirect_sampler = Sampler::new(device, SamplerDesc::equirect(), "equirect")?;
         let cube_sampler = Sampler::new(device, SamplerDesc::linear_clamp(), "cube source")?;
-
-        let source = source_cube(gpu, desc)?;
-        let source_view = source.view("environment source cube")?;
-        let source_mip0 = source.mip_view(0, "environment source mip 0")?;
-        let convert = ComputeKernel::build(gpu, &CONVERT_KERNEL, &[], &[], KernelSpec::default())?;
-        let mut convert_set = DescriptorSet::new(device, &convert.set_layout, "equirect to cube")?;
-        convert_set
-            .write(0, Resource::Sampled(&source_2d_view, &equirect_sampler))
-            .write(1, Resource::Storage(&source_mip0));
-        submit_and_wait(device, "environment source", |rec| {
-            rec.begin_label("equirect to cube");
-            rec.transition(
-                &source,
-                0..1,
-                ImageState::Undefined,
-                ImageState::ComputeWrite,
-            );
-            convert.record_dispatch(
-                rec,
-                &[&convert_set],
-                &ConvertPush { face_size: size },
-                [size, size, 6],
-            );
-            record_mip_chain(rec, &source);
-            rec.end_label();
-            Ok(())
-        })?;
+        let (source, source_view) = source_cube(gpu, equirect, desc)?;
         let (cube, view) = prefiltered_cube(
             gpu,
-            (&source, &source_view, &cube_sampler),
+            (&source_view, &cube_sampler),
+            &source,
             desc,
             Weighting::Karis,
         )?;
@@ -190,6 +169,8 @@ impl Environment {
             cube,
             view,
             matched: None,
+            lamps: lamps::extract(equirect),
+            lamps_cube: None,
             source,
             source_view,
             cube_sampler,
@@ -209,7 +190,8 @@ impl Environment {
         if self.matched.is_none() {
             self.matched = Some(prefiltered_cube(
                 gpu,
-                (&self.source, &self.source_view, &self.cube_sampler),
+                (&self.source_view, &self.cube_sampler),
+                &self.source,
                 self.desc,
                 Weighting::Matched,
             )?);
@@ -220,6 +202,33 @@ impl Environment {
     /// The matched cube's view, once built.
     pub fn matched_view(&self) -> Option<&ImageView> {
         self.matched.as_ref().map(|(_, view)| view)
+    }
+
+    /// The environment's lamps (`ibl=lamps`), brightest first.
+    pub fn lamps(&self) -> &[Lamp] {
+        &self.lamps.lamps
+    }
+
+    /// Builds the lamps' cube (`ibl=lamps`) unless built: the map without its lamps converted
+    /// to a cube of its own, then prefiltered as Karis's; its mip 0, which a mirror lobe
+    /// reads, is the whole map's.
+    pub fn build_lamps(&mut self, gpu: &Gpu) -> Result<()> {
+        if self.lamps_cube.is_none() {
+            let (_source, source_view) = source_cube(gpu, &self.lamps.residual, self.desc)?;
+            self.lamps_cube = Some(prefiltered_cube(
+                gpu,
+                (&source_view, &self.cube_sampler),
+                &self.source,
+                self.desc,
+                Weighting::Karis,
+            )?);
+        }
+        Ok(())
+    }
+
+    /// The lamps' cube, once built.
+    pub fn lamps_view(&self) -> Option<&ImageView> {
+        self.lamps_cube.as_ref().map(|(_, view)| view)
     }
 
     /// Reads mip `mip` of the cube of `weighting` back as RGBA f32 texels, face-major (faces in
@@ -251,23 +260,51 @@ fn cube_usage() -> ImageUsageFlags {
         | ImageUsageFlags::TRANSFER_DST
 }
 
-/// The source cube of a `desc.face_size` environment: every mip, mip 0 converted from the
-/// map, the others blitted down.
-fn source_cube(gpu: &Gpu, desc: EnvDesc) -> Result<Image> {
-    let image = ImageDesc::new_cube(Format::R16G16B16A16_SFLOAT, desc.face_size).all_mips();
-    Ok(Image::new(
-        &gpu.device,
-        image.usage(cube_usage()),
-        "environment source cube",
-    )?)
+/// The source cube of a `desc.face_size` environment, with its view, in `ComputeRead`: mip 0
+/// converted from the map, the others blitted down.
+fn source_cube(gpu: &Gpu, equirect: &HdrImage, desc: EnvDesc) -> Result<(Image, ImageView)> {
+    let device = &gpu.device;
+    let size = desc.face_size;
+    let (_source_2d, source_2d_view) = upload_equirect(gpu, equirect)?;
+    let equirect_sampler = Sampler::new(device, SamplerDesc::equirect(), "equirect")?;
+    let image = ImageDesc::new_cube(Format::R16G16B16A16_SFLOAT, size).all_mips();
+    let source = Image::new(device, image.usage(cube_usage()), "environment source cube")?;
+    let source_view = source.view("environment source cube")?;
+    let source_mip0 = source.mip_view(0, "environment source mip 0")?;
+    let convert = ComputeKernel::build(gpu, &CONVERT_KERNEL, &[], &[], KernelSpec::default())?;
+    let mut convert_set = DescriptorSet::new(device, &convert.set_layout, "equirect to cube")?;
+    convert_set
+        .write(0, Resource::Sampled(&source_2d_view, &equirect_sampler))
+        .write(1, Resource::Storage(&source_mip0));
+    submit_and_wait(device, "environment source", |rec| {
+        rec.begin_label("equirect to cube");
+        rec.transition(
+            &source,
+            0..1,
+            ImageState::Undefined,
+            ImageState::ComputeWrite,
+        );
+        convert.record_dispatch(
+            rec,
+            &[&convert_set],
+            &ConvertPush { face_size: size },
+            [size, size, 6],
+        );
+        record_mip_chain(rec, &source);
+        rec.end_label();
+        Ok(())
+    })?;
+    Ok((source, source_view))
 }
 
 /// A prefiltered cube of `desc.mip_count` mips from the source cube (in `ComputeRead`, with
-/// its view and sampler), its samples weighed by `weighting`: mip 0 a copy of the source's,
-/// mips ≥ 1 the GGX prefilter. Left in `FragmentRead`, the source back in `ComputeRead`.
+/// its view and sampler), its samples weighed by `weighting`: mip 0 a copy of `mirror`'s (a
+/// source cube in `ComputeRead`: the source itself, or the whole map's under a residual's),
+/// mips ≥ 1 the GGX prefilter. Left in `FragmentRead`, the sources back in `ComputeRead`.
 fn prefiltered_cube(
     gpu: &Gpu,
-    (source, source_view, sampler): (&Image, &ImageView, &Sampler),
+    (source_view, sampler): (&ImageView, &Sampler),
+    mirror: &Image,
     desc: EnvDesc,
     weighting: Weighting,
 ) -> Result<(Image, ImageView)> {
@@ -292,13 +329,13 @@ fn prefiltered_cube(
     submit_and_wait(device, name, |rec| {
         rec.begin_label("GGX prefilter");
         rec.transition(
-            source,
+            mirror,
             0..1,
             ImageState::ComputeRead,
             ImageState::TransferSrc,
         );
         rec.transition(&cube, 0..1, ImageState::Undefined, ImageState::TransferDst);
-        rec.copy_mip0(source, &cube);
+        rec.copy_mip0(mirror, &cube);
         rec.transition(
             &cube,
             0..1,
@@ -306,7 +343,7 @@ fn prefiltered_cube(
             ImageState::FragmentRead,
         );
         rec.transition(
-            source,
+            mirror,
             0..1,
             ImageState::TransferSrc,
             ImageState::ComputeRead,
@@ -455,15 +492,9 @@ pub fn irradiance_sh(equirect: &HdrImage) -> [[f32; 4]; 9] {
     let (w, h) = (equirect.width, equirect.height);
     let mut sum = [[0.0f64; 3]; 9];
     for y in 0..h {
-        let theta = PI * (y as f64 + 0.5) / h as f64;
-        let d_omega = (2.0 * PI / w as f64) * (PI / h as f64) * theta.sin();
+        let d_omega = texel_solid_angle(y, w, h);
         for x in 0..w {
-            let phi = 2.0 * PI * ((x as f64 + 0.5) / w as f64 - 0.5);
-            let d = DVec3::new(
-                theta.sin() * phi.sin(),
-                theta.cos(),
-                -theta.sin() * phi.cos(),
-            );
+            let d = equirect_direction(x, y, w, h);
             let p = equirect.pixel(x, y);
             for (k, y_k) in sh9(d).iter().enumerate() {
                 for c in 0..3 {

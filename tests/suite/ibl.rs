@@ -112,7 +112,8 @@ fn an_unknown_ibl_value_is_refused_by_name() {
     assert!(!out.status.success());
     let stderr = common::text(&out.stderr);
     assert!(
-        stderr.contains("`exact`") && stderr.contains("split-sum, matched, taps, anisotropic"),
+        stderr.contains("`exact`")
+            && stderr.contains("split-sum, matched, taps, anisotropic, lamps"),
         "{stderr}"
     );
 }
@@ -121,7 +122,8 @@ fn an_unknown_ibl_value_is_refused_by_name() {
 /// whole error), the lighting's part of FLIP falls from the split sum to `matched` (the cube
 /// prefiltered with the lobe's weights, read where its kernel comes closest to the lobe in
 /// L²) and again to `taps`, and from `matched` to `anisotropic` (its two fetches along the
-/// lobe's major axis): the orderings of one run, against one reference.
+/// lobe's major axis) and to `lamps` (the studio's lamps lit as disk lights): the orderings of
+/// one run, against one reference.
 #[test]
 fn under_the_studio_the_lighting_error_falls_from_split_sum_to_matched_to_taps() {
     use lamina::profile::bench::BenchConfig;
@@ -165,8 +167,45 @@ fn under_the_studio_the_lighting_error_falls_from_split_sum_to_matched_to_taps()
         .map(|e| e.lighting.unwrap().flip)
         .collect();
     assert!(
-        lighting[1] < lighting[0] && lighting[2] < lighting[1] && lighting[3] < lighting[1],
-        "lighting FLIP split-sum, matched, taps, anisotropic: {lighting:?}"
+        lighting[1] < lighting[0]
+            && lighting[2] < lighting[1]
+            && lighting[3] < lighting[1]
+            && lighting[4] < lighting[1],
+        "lighting FLIP split-sum, matched, taps, anisotropic, lamps: {lighting:?}"
     );
+    common::assert_validation_clean(&gpu);
+}
+
+/// An `ibl=lamps` pass holds its environment's lamps as constants: under another environment
+/// the renderer refuses it by name, and the pass cache prepares it again.
+#[test]
+fn a_lamps_pass_is_refused_under_another_environment_and_the_cache_prepares_it_again() {
+    use lamina::render::PassCache;
+
+    let gpu = common::gpu();
+    let mut renderer =
+        Renderer::with_target(&gpu, &common::studio(), DESC, TargetFormat::Float).unwrap();
+    let stack = Stack::resolve("gold").unwrap();
+    let layers = stack.params();
+    let variant = VariantKey {
+        ibl: Ibl::Lamps,
+        ..stack.variant(None).unwrap()
+    };
+    let key = PassKey::uniform(variant, &layers, &Lighting::default()).unwrap();
+    let mut cache = PassCache::new();
+    let under_studio = {
+        let pass = cache.get(&mut renderer, &key).unwrap();
+        renderer.render(pass, &layers, 16, 16).unwrap().pixels
+    };
+    let stale = renderer.prepare(&key).unwrap();
+    renderer.set_environment(&uniform(), DESC).unwrap();
+    let Err(err) = renderer.render(&stale, &layers, 16, 16) else {
+        panic!("a lamps pass rendered under another environment");
+    };
+    let err = err.to_string();
+    assert!(err.contains("lamps of another environment"), "{err}");
+    let pass = cache.get(&mut renderer, &key).unwrap();
+    let under_uniform = renderer.render(pass, &layers, 16, 16).unwrap().pixels;
+    assert_ne!(under_studio, under_uniform);
     common::assert_validation_clean(&gpu);
 }

@@ -24,7 +24,8 @@ layout(set = 1, binding = 3, std430) readonly buffer EnvironmentSampling {
     float env_cdf[];
 };
 // The environment prefiltered with the lobe's own weighting (tables::environment's matched
-// cube), which `ibl=matched` and `ibl=taps` read; a pass of another `ibl` never reads it.
+// cube), which `ibl=matched`, `ibl=taps` and `ibl=anisotropic` read; under `ibl=lamps`, Karis's
+// cube of the map without its lamps (tables::lamps); a split-sum pass never reads it.
 layout(set = 1, binding = 4) uniform samplerCube matched;
 // Each GGX lobe's mean direction and spread over (√μ, √α) (tables::lobe_moments): where and at
 // which mip `ibl=matched` reads the matched cube.

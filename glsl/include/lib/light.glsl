@@ -43,7 +43,11 @@ float white_albedo(float n_dot_v, float alpha) {
 // the transport's ratio (weight / A), whose Fresnel factor rises across the lobe towards
 // grazing as the walk's does (ALGORITHMS.md §17). It is normalised at the model's roughness:
 // a light that widens the lobe (a disk, the floor) spreads it and keeps A.
-float light_lobe(vec3 n, vec3 v, float n_dot_v, vec3 l, float alpha, bool retro, vec2 top) {
+//
+// light_lobe_with takes the white lobe's albedo to divide by instead of reading it at α, as
+// the environment's lamps do (lib/shade.glsl's lobe_lamps: one read per lobe, not per lamp).
+float light_lobe_with(
+    vec3 n, vec3 v, float n_dot_v, vec3 l, float alpha, bool retro, vec2 top, float albedo) {
     float n_dot_l = dot(n, l);
     if (n_dot_l <= 0.0) {
         return 0.0;
@@ -56,7 +60,11 @@ float light_lobe(vec3 n, vec3 v, float n_dot_v, vec3 l, float alpha, bool retro,
         float f = fresnel_dielectric(max(dot(view, h), 0.0), top.x);
         return top.y > 0.0 ? d * g2 * f / (4.0 * n_dot_v * top.y) : 0.0;
     }
-    return d * g2 / (4.0 * n_dot_v * white_albedo(n_dot_v, alpha));
+    return d * g2 / (4.0 * n_dot_v * albedo);
+}
+
+float light_lobe(vec3 n, vec3 v, float n_dot_v, vec3 l, float alpha, bool retro, vec2 top) {
+    return light_lobe_with(n, v, n_dot_v, l, alpha, retro, top, white_albedo(n_dot_v, alpha));
 }
 
 #endif

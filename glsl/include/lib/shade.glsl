@@ -18,6 +18,8 @@ vec3 shade_n;
 vec3 shade_v;
 float shade_n_dot_v;
 vec3 shade_sum;
+// ibl=lamps: the share of the last lobe_fetch that read the cube without the lamps.
+float shade_lamps_share;
 
 // The mirror image of direction `d` in the tangent plane of normal `n`: where a lobe that
 // transmits through a thin slab reads what a reflection lobe would read at `d`.
@@ -28,16 +30,18 @@ vec3 shade_behind(vec3 n, vec3 d) {
 // One fetch of the environment for a lobe of roughness α around `r` (`behind`: mirrored):
 // `ibl=split-sum`, Karis's cube along Lagarde's dominant direction at the lobe's own mip;
 // `ibl=matched`, the matched cube where its kernel comes closest to the lobe in L²
-// (lib/ibl.glsl's ibl_lobe_fit); the others, the matched cube along the lobe's mean
-// direction at the mip of its spread (ibl_lobe_moments), `ibl=anisotropic` in two fetches
-// that match its second moments too. A mirror lobe reads mip 0 along `r` either way.
+// (lib/ibl.glsl's ibl_lobe_fit); `ibl=lamps` as the split sum, from Karis's cube of the map
+// without its lamps above mip 0 (tables::lamps), which the `matched` binding then holds
+// (lobe_lamps adds them); the others, the matched cube along the lobe's mean direction at the
+// mip of its spread (ibl_lobe_moments), `ibl=anisotropic` in two fetches that match its second
+// moments too. A mirror lobe reads mip 0, the whole map, along `r` either way.
 vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
     vec3 dir;
     float mip;
     if (alpha <= IBL_MIN_ALPHA) {
         dir = r;
         mip = 0.0;
-    } else if (IBL == IBL_SPLIT_SUM) {
+    } else if (IBL == IBL_SPLIT_SUM || IBL == IBL_LAMPS) {
         dir = ibl_dominant_direction(n, r, alpha);
         mip = ibl_mip_of_alpha(alpha, frame.params.x);
     } else if (IBL == IBL_MATCHED) {
@@ -65,6 +69,7 @@ vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
         mip = ibl_matched_mip_of_alpha(moments.y * moments.y, frame.params.x);
     }
     dir = behind ? shade_behind(n, dir) : dir;
+    shade_lamps_share = clamp(mip, 0.0, 1.0);
     return IBL == IBL_SPLIT_SUM ? textureLod(prefiltered, dir, mip).rgb
                                 : textureLod(matched, dir, mip).rgb;
 }
@@ -144,6 +149,24 @@ vec3 lobe_lights(float alpha, bool retro, bool behind, vec2 top) {
     return sum;
 }
 
+// `ibl=lamps`: what the environment's lamps (tables::lamps: disk lights, which the pass holds
+// as constants, generated/layer_values.glsl's ibl_lamp) send back through a lobe of unit
+// weight and roughness α, as lobe_lights lights a disk light, but normalised once per lobe, by
+// the white lobe's albedo at α. Times the share of the lobe's fetch that read the cube
+// without them (shade_lamps_share): none at mip 0, which holds the whole map, all from mip 1.
+vec3 lobe_lamps(float alpha, bool retro, bool behind, vec2 top) {
+    vec3 sum = vec3(0.0);
+    float albedo = white_albedo(shade_n_dot_v, max(alpha, LIGHT_ALPHA_FLOOR));
+    [[unroll]] for (uint k = 0u; k < IBL_LAMP_COUNT; ++k) {
+        vec4 lamp = ibl_lamp(2u * k);
+        vec3 l = behind ? shade_behind(shade_n, lamp.xyz) : lamp.xyz;
+        float a = min(max(alpha, LIGHT_ALPHA_FLOOR) + lamp.w, 1.0);
+        sum += ibl_lamp(2u * k + 1u).rgb
+            * light_lobe_with(shade_n, shade_v, shade_n_dot_v, l, a, retro, top, albedo);
+    }
+    return shade_lamps_share * sum;
+}
+
 // What a Lambertian lobe of unit weight sends back (src/model/diffuse.rs): the irradiance at
 // the point over π — the lights' E·max(n·l, 0), and the environment's, cosine-convolved
 // (its order-2 spherical harmonics, tables::environment::irradiance_sh).
@@ -168,7 +191,9 @@ vec3 lobe_light(vec3 around, float alpha, bool retro, bool behind, vec2 top) {
     vec3 sum = lobe_lights(alpha, retro, behind, top);
     float scale = frame.params.y;
     if (scale > 0.0) {
-        sum += scale * lobe_radiance(shade_n, around, alpha, behind);
+        vec3 fetched = lobe_radiance(shade_n, around, alpha, behind);
+        vec3 lamps = IBL == IBL_LAMPS ? lobe_lamps(alpha, retro, behind, top) : vec3(0.0);
+        sum += scale * (fetched + lamps);
     }
     return sum;
 }

@@ -45,9 +45,9 @@ layout(constant_id = 21) const uint TRANSPORT = 0;
 // 1: the stack may end in a dielectric (neither a conductor nor a diffuse base) and transmits:
 // the forward pass shades what it transmits from behind the surface; 0 folds that code away.
 layout(constant_id = 22) const uint TRANSMITS = 0;
-// The `ibl` axis in its low byte — IBL_SPLIT_SUM, IBL_MATCHED, IBL_TAPS or IBL_ANISOTROPIC: how
-// the environment lights each lobe (lib/shade.glsl's lobe_radiance) — and above it `taps`,
-// the directions ibl=taps reads per lobe (src/variant.rs, VariantKey::spec).
+// The `ibl` axis in its low byte — IBL_SPLIT_SUM, IBL_MATCHED, IBL_TAPS, IBL_ANISOTROPIC or
+// IBL_LAMPS: how the environment lights each lobe (lib/shade.glsl's lobe_radiance) — and above
+// it `taps`, the directions ibl=taps reads per lobe (src/variant.rs, VariantKey::spec).
 layout(constant_id = 23) const uint IBL_SPEC = 0;
 const uint IBL = IBL_SPEC & 0xFFu;
 const uint IBL_TAP_COUNT = IBL_SPEC >> 8;
