@@ -176,6 +176,48 @@ fn under_the_studio_the_lighting_error_falls_from_split_sum_to_matched_to_taps()
     common::assert_validation_clean(&gpu);
 }
 
+/// Under the studio every preset (maps, diffuse base, 6-flux, thin slab) renders finite under
+/// `ibl=lamps`, and its lamps change the image the split sum gives.
+#[test]
+fn every_preset_renders_under_the_studio_lamps() {
+    let gpu = common::gpu();
+    let mut renderer =
+        Renderer::with_target(&gpu, &common::studio(), DESC, TargetFormat::Float).unwrap();
+    for path in presets() {
+        let stack = Stack::load(&path).unwrap();
+        let layers = stack.params();
+        renderer.set_surface(stack.surface.as_ref()).unwrap();
+        let mut image = |ibl| {
+            let variant = VariantKey {
+                ibl,
+                ..stack.variant(None).unwrap()
+            };
+            let key = PassKey::new(
+                variant,
+                &layers,
+                stack.surface.as_deref(),
+                &Lighting::default(),
+            )
+            .unwrap();
+            let pass = renderer.prepare(&key).unwrap();
+            renderer.render(&pass, &layers, 24, 24).unwrap().pixels
+        };
+        let (split, lamps) = (image(Ibl::SplitSum), image(Ibl::Lamps));
+        assert!(
+            lamps.iter().flatten().all(|c| c.is_finite()),
+            "{}: a non-finite pixel under ibl=lamps",
+            stack.name
+        );
+        let d = common::largest_relative(&split, &lamps, 1e-6);
+        assert!(
+            d > 1e-2,
+            "{}: ibl=lamps within {d:.1e} of the split sum",
+            stack.name
+        );
+    }
+    common::assert_validation_clean(&gpu);
+}
+
 /// An `ibl=lamps` pass holds its environment's lamps as constants: under another environment
 /// the renderer refuses it by name, and the pass cache prepares it again.
 #[test]
