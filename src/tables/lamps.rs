@@ -1,9 +1,10 @@
 //! `ibl=lamps`: the environment's lamps taken out of the map and lit as analytic disk lights.
 //!
 //! A studio map holds most of its light in a few small bright regions (the bundled studio:
-//! four lamps of 3–7°, 85 % of its power). One fetch of a prefiltered cube blurs such a lamp
-//! with a kernel of the cube's shape, not the lobe's; a lobe evaluated at the lamp's direction
-//! keeps its own shape, its grazing stretch and its peak (`lib/light.glsl`'s `light_lobe`).
+//! four lamps of 2–6° radius, 85 % of its power). One fetch of a prefiltered cube blurs such a
+//! lamp with a kernel of the cube's shape, not the lobe's; a lobe evaluated at the lamp's
+//! direction keeps its own shape, its grazing stretch and its peak (`lib/light.glsl`'s
+//! `light_lobe`).
 //! So the map is split into a residual, which the split sum reads from a cube of its own
 //! (`tables::environment`), and lamps:
 //!
@@ -316,15 +317,51 @@ mod tests {
         assert_eq!(split.residual.pixels[10 * w + 10], map.pixels[10 * w + 10]);
     }
 
-    #[test]
-    fn the_bundled_studio_gives_four_lamps_of_a_few_degrees() {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/env/studio.exr");
-        let map = crate::imageio::read_exr(std::path::Path::new(path)).unwrap();
+    /// The share of `map`'s luminous power each of its lamps takes (`cargo test --lib lamps --
+    /// --nocapture` prints them).
+    fn shares(name: &str) -> Vec<(f64, Lamp)> {
+        let path = format!("{}/assets/env/{name}.exr", env!("CARGO_MANIFEST_DIR"));
+        let map = crate::imageio::read_exr(std::path::Path::new(&path)).unwrap();
+        let (w, h) = (map.width, map.height);
+        let power: f64 = (0..w * h)
+            .map(|k| luminance(map.pixels[k]) * texel_solid_angle(k / w, w, h))
+            .sum();
         let split = extract(&map);
-        assert_eq!(split.lamps.len(), MAX_LAMPS);
-        for lamp in &split.lamps {
+        split
+            .lamps
+            .iter()
+            .map(|lamp| {
+                let e: f64 = (0..3).map(|c| LUMINANCE[c] * lamp.irradiance[c]).sum();
+                let share = e / power;
+                println!(
+                    "{name}: lamp of {:.2}° towards {:.3}, {:.1} % of the light",
+                    lamp.angular_radius.to_degrees(),
+                    lamp.direction,
+                    100.0 * share
+                );
+                (share, *lamp)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_bundled_studio_gives_four_lamps_of_a_few_degrees_and_most_of_its_light() {
+        let lamps = shares("studio");
+        assert_eq!(lamps.len(), MAX_LAMPS);
+        for (_, lamp) in &lamps {
             let r = lamp.angular_radius.to_degrees();
             assert!(r > 1.0 && r < MAX_LAMP_RADIUS_DEG, "{lamp:?}");
         }
+        let total: f64 = lamps.iter().map(|(share, _)| share).sum();
+        println!("studio: the lamps take {:.1} % of the light", 100.0 * total);
+        assert!(total > 0.8, "{total}");
+    }
+
+    #[test]
+    fn the_bundled_sunset_gives_its_sun_and_leaves_its_sky() {
+        let lamps = shares("sunset");
+        let (share, sun) = lamps[0];
+        assert!(sun.angular_radius.to_degrees() < 5.0, "{sun:?}");
+        assert!(share > 0.01 && share < 0.05, "{share}");
     }
 }
