@@ -123,7 +123,7 @@ pub fn run(
         .iter()
         .zip(times.iter().zip(invocations))
         .map(|(key, (times, fragment_invocations))| {
-            let pass = passes.find(key).expect("prepared above");
+            let pass = passes.find(&renderer, key).expect("prepared above");
             Ok(CaseTiming {
                 summary: Summary::of(times)
                     .ok_or_else(|| Error::Unsupported("a timing was not finite".into()))?,

@@ -369,9 +369,12 @@ impl PassCache {
         Ok(self.passes.last().expect("pushed above"))
     }
 
-    /// The pass of `key`, if prepared.
-    pub fn find(&self, key: &PassKey) -> Option<&ForwardPass> {
-        self.passes.iter().find(|p| requested(p, key))
+    /// The pass of `key`, if prepared and holding `renderer`'s lamps.
+    pub fn find(&self, renderer: &Renderer<'_>, key: &PassKey) -> Option<&ForwardPass> {
+        let lamps = renderer.lamps_of(key.variant);
+        self.passes
+            .iter()
+            .find(|p| requested(p, key) && p.key.lamps == lamps)
     }
 }
 

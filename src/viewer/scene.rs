@@ -134,7 +134,9 @@ fn step(
         request.surface.as_deref(),
         &request.lighting,
     );
-    let compiled = key.as_ref().map_or(true, |k| passes.find(k).is_none());
+    let compiled = key
+        .as_ref()
+        .map_or(true, |k| passes.find(renderer, k).is_none());
     if compiled {
         let built = key.as_ref().map_err(|e| e.to_string()).and_then(|k| {
             passes
@@ -147,7 +149,7 @@ fn step(
             error: built.err(),
         });
     }
-    let Some(pass) = key.ok().and_then(|k| passes.find(&k)) else {
+    let Some(pass) = key.ok().and_then(|k| passes.find(renderer, &k)) else {
         return Ok(None);
     };
     if pass.key.admits(&request.layers).is_err() {

@@ -219,7 +219,8 @@ fn every_preset_renders_under_the_studio_lamps() {
 }
 
 /// An `ibl=lamps` pass holds its environment's lamps as constants: under another environment
-/// the renderer refuses it by name, and the pass cache prepares it again.
+/// the renderer refuses it by name, the pass cache no longer finds it (the viewer asks it
+/// first) and prepares it again.
 #[test]
 fn a_lamps_pass_is_refused_under_another_environment_and_the_cache_prepares_it_again() {
     use lamina::render::PassCache;
@@ -246,6 +247,7 @@ fn a_lamps_pass_is_refused_under_another_environment_and_the_cache_prepares_it_a
     };
     let err = err.to_string();
     assert!(err.contains("lamps of another environment"), "{err}");
+    assert!(cache.find(&renderer, &key).is_none());
     let pass = cache.get(&mut renderer, &key).unwrap();
     let under_uniform = renderer.render(pass, &layers, 16, 16).unwrap().pixels;
     assert_ne!(under_studio, under_uniform);
