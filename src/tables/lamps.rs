@@ -364,4 +364,15 @@ mod tests {
         assert!(sun.angular_radius.to_degrees() < 5.0, "{sun:?}");
         assert!(share > 0.01 && share < 0.05, "{share}");
     }
+
+    #[test]
+    fn the_bundled_courtyard_gives_patches_wider_than_the_studio_lamps() {
+        let widest = |name| {
+            shares(name)
+                .iter()
+                .map(|(_, lamp)| lamp.angular_radius)
+                .fold(0.0, f64::max)
+        };
+        assert!(widest("courtyard") > widest("studio"));
+    }
 }
