@@ -25,7 +25,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{ComputeKernel, Gpu};
 use crate::imageio::HdrImage;
 use crate::shader::kernel::{KernelInterface, KernelSpec, LOCAL_SIZE_2D};
-use crate::tables::lamps::{self, equirect_direction, texel_solid_angle, Lamp, Lamps};
+use crate::tables::lamps::{self, Lamp, Lamps};
 use crate::vk::{
     submit_and_wait, upload_image, BindingKind, Buffer, BufferUsageFlags, DescriptorSet, Format,
     Image, ImageDesc, ImageState, ImageUsageFlags, ImageView, Recorder, Resource, Sampler,
@@ -582,6 +582,24 @@ pub fn sampling_tables(equirect: &HdrImage) -> Vec<u32> {
         }
     }
     out
+}
+
+/// Direction through the centre of texel (x, y) of a `w`×`h` equirect map: [`equirect_uv`]'s
+/// mapping, inverted.
+pub fn equirect_direction(x: usize, y: usize, w: usize, h: usize) -> DVec3 {
+    let theta = PI * (y as f64 + 0.5) / h as f64;
+    let phi = 2.0 * PI * ((x as f64 + 0.5) / w as f64 - 0.5);
+    DVec3::new(
+        theta.sin() * phi.sin(),
+        theta.cos(),
+        -theta.sin() * phi.cos(),
+    )
+}
+
+/// Solid angle of a texel in row `y` of a `w`×`h` equirect map.
+pub fn texel_solid_angle(y: usize, w: usize, h: usize) -> f64 {
+    let theta = PI * (y as f64 + 0.5) / h as f64;
+    (2.0 * PI / w as f64) * (PI / h as f64) * theta.sin()
 }
 
 /// Equirect texture coordinates of unit direction `d`: the CPU mirror of `equirect_uv` in

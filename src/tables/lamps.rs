@@ -28,6 +28,8 @@ use glam::DVec3;
 
 use crate::imageio::HdrImage;
 
+use super::environment::{equirect_direction, texel_solid_angle};
+
 pub use crate::variant::LAMP_VALUES;
 
 /// Most lamps an environment gives (each lobe evaluates every slot, dark or not).
@@ -64,24 +66,6 @@ pub struct Lamps {
     pub lamps: Vec<Lamp>,
     /// The map without the lamps' light.
     pub residual: HdrImage,
-}
-
-/// Direction through the centre of texel (x, y) of a `w`×`h` equirect map: the mapping of
-/// `tables::environment::equirect_uv`, inverted.
-pub fn equirect_direction(x: usize, y: usize, w: usize, h: usize) -> DVec3 {
-    let theta = PI * (y as f64 + 0.5) / h as f64;
-    let phi = 2.0 * PI * ((x as f64 + 0.5) / w as f64 - 0.5);
-    DVec3::new(
-        theta.sin() * phi.sin(),
-        theta.cos(),
-        -theta.sin() * phi.cos(),
-    )
-}
-
-/// Solid angle of a texel in row `y` of a `w`×`h` equirect map.
-pub fn texel_solid_angle(y: usize, w: usize, h: usize) -> f64 {
-    let theta = PI * (y as f64 + 0.5) / h as f64;
-    (2.0 * PI / w as f64) * (PI / h as f64) * theta.sin()
 }
 
 fn luminance(p: [f32; 4]) -> f64 {

@@ -183,32 +183,16 @@ fn every_preset_renders_under_the_studio_lamps() {
     let gpu = common::gpu();
     let mut renderer =
         Renderer::with_target(&gpu, &common::studio(), DESC, TargetFormat::Float).unwrap();
+    let lamps_at = Ibl::VALUES
+        .iter()
+        .position(|&(_, ibl)| ibl == Ibl::Lamps)
+        .unwrap();
     for path in presets() {
         let stack = Stack::load(&path).unwrap();
-        let layers = stack.params();
-        renderer.set_surface(stack.surface.as_ref()).unwrap();
-        let mut image = |ibl| {
-            let variant = VariantKey {
-                ibl,
-                ..stack.variant(None).unwrap()
-            };
-            let key = PassKey::new(
-                variant,
-                &layers,
-                stack.surface.as_deref(),
-                &Lighting::default(),
-            )
-            .unwrap();
-            let pass = renderer.prepare(&key).unwrap();
-            renderer.render(&pass, &layers, 24, 24).unwrap().pixels
-        };
-        let (split, lamps) = (image(Ibl::SplitSum), image(Ibl::Lamps));
-        assert!(
-            lamps.iter().flatten().all(|c| c.is_finite()),
-            "{}: a non-finite pixel under ibl=lamps",
-            stack.name
-        );
-        let d = common::largest_relative(&split, &lamps, 1e-6);
+        // `images` checks every pixel is finite.
+        let images = images(&mut renderer, &stack, 24);
+        let (split, lamps) = (&images[0], &images[lamps_at]);
+        let d = common::largest_relative(split, lamps, 1e-6);
         assert!(
             d > 1e-2,
             "{}: ibl=lamps within {d:.1e} of the split sum",

@@ -19,11 +19,16 @@ const float LIGHT_ALPHA_FLOOR = LIGHT_MIN_ALPHA_FP16;
 const float LIGHT_ALPHA_FLOOR = LIGHT_MIN_ALPHA;
 #endif
 
-// The roughness a lobe of roughness α is shaded with under a light of angular radius θ_r
-// (radians): floored (a punctual light's highlight on a mirror is a delta), then widened by
-// the disk, tan(θ_r/2) (model::light::shading_alpha).
+// The roughness a lobe of roughness α is shaded with under a light whose disk widens it by
+// `widening`, tan(θ_r/2) of its angular radius θ_r: floored (a punctual light's highlight on
+// a mirror is a delta), then widened (model::light::shading_alpha).
+float light_alpha_widened(float alpha, float widening) {
+    return min(max(alpha, LIGHT_ALPHA_FLOOR) + widening, 1.0);
+}
+
+// light_alpha_widened under a light of angular radius θ_r (radians).
 float light_alpha(float alpha, float angular_radius) {
-    return min(max(alpha, LIGHT_ALPHA_FLOOR) + tan(0.5 * angular_radius), 1.0);
+    return light_alpha_widened(alpha, tan(0.5 * angular_radius));
 }
 
 // E(μ_v, α): the white GGX lobe's directional albedo, from the shading set's table (vertex-

@@ -160,7 +160,7 @@ vec3 lobe_lamps(float alpha, bool retro, bool behind, vec2 top) {
     [[unroll]] for (uint k = 0u; k < IBL_LAMP_COUNT; ++k) {
         vec4 lamp = ibl_lamp(2u * k);
         vec3 l = behind ? shade_behind(shade_n, lamp.xyz) : lamp.xyz;
-        float a = min(max(alpha, LIGHT_ALPHA_FLOOR) + lamp.w, 1.0);
+        float a = light_alpha_widened(alpha, lamp.w);
         sum += ibl_lamp(2u * k + 1u).rgb
             * light_lobe_with(shade_n, shade_v, shade_n_dot_v, l, a, retro, top, albedo);
     }
