@@ -42,13 +42,21 @@ layout(early_fragment_tests) in;
 // integrated by Monte Carlo against the unfiltered environment (the cube's level 0) and the
 // lights (a disk light over its disk): REFERENCE_SAMPLES iterations per lobe per frame, each
 // one direction through the lobe and one from the environment's importance sampling
-// (reference_environment), seeded by the pixel, the frame (frame.params.z) and the seed's
-// stream (frame.params.w's bits, render::reference::stream); the host
-// averages the frames. No split sum, no
-// prefiltering, no FGD table.
+// (reference_environment), drawn by randomised quasi-Monte Carlo (reference_random2). The host
+// averages the frames. No split sum, no prefiltering, no FGD table.
 const uint REFERENCE_SAMPLES = 16u;
 
-uint reference_state;
+// The sampler's state. Sample k of an integral (k = frame × REFERENCE_SAMPLES + s, running on
+// over the frames: frame.params.z) draws its pairs of numbers from one scrambled sequence per
+// pair; a pixel's integrals (a lobe's environment, a lobe's disk light) are numbered in the
+// order the pass begins them, which every frame repeats, so each keeps its sequence across
+// frames. The scrambles are seeded by the pixel, the integral, the pair and the seed's stream
+// (frame.params.w's bits, render::reference::stream).
+uint reference_pixel;
+uint reference_integrals;
+uint reference_integral;
+uint reference_index;
+uint reference_pair;
 
 // A 32-bit hash (PCG's output permutation of an LCG step).
 uint reference_hash(uint x) {
@@ -57,10 +65,60 @@ uint reference_hash(uint x) {
     return (word >> 22u) ^ word;
 }
 
-// Uniform in [0, 1).
-float reference_random() {
-    reference_state = reference_hash(reference_state);
-    return float(reference_state >> 8u) * (1.0 / 16777216.0);
+// Begins the pixel's next integral.
+void reference_begin_integral() {
+    reference_integral = reference_hash(reference_pixel ^ reference_hash(reference_integrals));
+    reference_integrals += 1u;
+}
+
+// Begins sample `s` of this frame in the current integral.
+void reference_begin_sample(uint s) {
+    reference_index = uint(frame.params.z) * REFERENCE_SAMPLES + s;
+    reference_pair = 0u;
+}
+
+// A random nested scramble of x's binary digits read as a fraction (most significant first):
+// each digit flipped by a function of the seed and the digits before it (Owen 1995), done on
+// the reversed bits by steps that change a bit only through the bits below it (an addition, a
+// product by an odd number, xor with a product by an even one). Uniform in [0, 2³²) for a
+// random seed; points of a (0, m, 2)-net stay a net. On an index it shuffles the sequence
+// while keeping every aligned block of 2^m indices a block.
+uint reference_scramble(uint x, uint seed) {
+    x = bitfieldReverse(x);
+    x += seed;
+    x ^= x * 0x9e3779b8u;
+    x *= reference_hash(seed) | 1u;
+    x ^= x * 0x2c1b3c6cu;
+    x += reference_hash(seed ^ 0x5bd1e995u);
+    x ^= x * 0x297a2d38u;
+    return bitfieldReverse(x);
+}
+
+// The second dimension of Sobol's sequence at index i: the XOR of the direction numbers of
+// i's set bits, v₁ = 2³¹ and v_{j+1} = v_j ⊕ v_j/2 (primitive polynomial x + 1). The first
+// dimension is i's reversed bits (van der Corput).
+uint reference_sobol1(uint i) {
+    uint v = 1u << 31u;
+    uint x = 0u;
+    for (uint j = 0u; j < 32u; ++j) {
+        x ^= (i & (1u << j)) != 0u ? v : 0u;
+        v ^= v >> 1u;
+    }
+    return x;
+}
+
+// The sample's next pair of numbers, uniform in [0, 1)²: the first two dimensions of Sobol's
+// sequence at the sample's index, the index shuffled and both coordinates scrambled by seeds
+// of the pair's own (Burley 2020, "Practical hash-based Owen scrambling"), so each pair is
+// stratified over the frames so far and the pairs are independent of each other. Every point
+// is uniform: the estimate stays unbiased, and two streams give independent images.
+vec2 reference_random2() {
+    uint seed = reference_hash(reference_integral ^ reference_hash(reference_pair));
+    reference_pair += 1u;
+    uint i = reference_scramble(reference_index, seed);
+    uint x = reference_scramble(bitfieldReverse(i), reference_hash(seed ^ 0x68bc21ebu));
+    uint y = reference_scramble(reference_sobol1(i), reference_hash(seed ^ 0x02e5be93u));
+    return vec2(uvec2(x, y) >> 8u) * (1.0 / 16777216.0);
 }
 
 // The top interface's Fresnel factor F(v·h) at relative IOR η for a LOBE_FRESNEL lobe
@@ -85,9 +143,10 @@ float reference_lobe(vec3 n, vec3 view, vec3 l, float alpha, float eta) {
 
 // A direction within the cone of half-angle `radius` around `axis`, uniform in solid angle.
 vec3 reference_cone(vec3 axis, float radius) {
-    float cos_t = 1.0 - reference_random() * (1.0 - cos(radius));
+    vec2 u = reference_random2();
+    float cos_t = 1.0 - u.x * (1.0 - cos(radius));
     float sin_t = sqrt(max(0.0, 1.0 - cos_t * cos_t));
-    float phi = TWO_PI * reference_random();
+    float phi = TWO_PI * u.y;
     return basis(axis) * vec3(sin_t * cos(phi), sin_t * sin(phi), cos_t);
 }
 
@@ -103,7 +162,9 @@ vec3 reference_lights(vec3 n, vec3 view, float alpha, bool diffuse, bool behind,
         float radius = lights[j].radiance.w;
         uint samples = radius > 0.0 ? REFERENCE_SAMPLES : 1u;
         float value = 0.0;
+        reference_begin_integral();
         for (uint s = 0u; s < samples; ++s) {
+            reference_begin_sample(s);
             vec3 l = radius > 0.0 ? reference_cone(centre, radius) : centre;
             l = behind ? shade_behind(n, l) : l;
             value += diffuse ? max(dot(n, l), 0.0) * INV_PI
@@ -149,9 +210,10 @@ uint reference_search(uint first, uint count, float u) {
 // cell of it by the row's CDF, a point uniform in the cell's (u, v).
 vec3 reference_env_sample() {
     uvec2 grid = env_sampling_info.xy;
-    uint i = reference_search(0u, grid.y, reference_random());
-    uint j = reference_search(grid.y + i * grid.x, grid.x, reference_random());
-    vec2 uv = (vec2(j, i) + vec2(reference_random(), reference_random())) / vec2(grid);
+    vec2 cell = reference_random2();
+    uint i = reference_search(0u, grid.y, cell.y);
+    uint j = reference_search(grid.y + i * grid.x, grid.x, cell.x);
+    vec2 uv = (vec2(j, i) + reference_random2()) / vec2(grid);
     float phi = (uv.x - 0.5) * TWO_PI;
     float theta = uv.y * PI;
     return vec3(sin(theta) * sin(phi), cos(theta), -sin(theta) * cos(phi));
@@ -191,9 +253,11 @@ vec3 reference_environment(vec3 n, vec3 view, float alpha, bool diffuse, bool be
         ? ibl_irradiance(n, frame.irradiance) * INV_PI
         : lobe_radiance(n, reflect(-view, n), alpha, behind);
     vec3 sum = vec3(0.0);
+    reference_begin_integral();
     for (uint s = 0u; s < REFERENCE_SAMPLES; ++s) {
+        reference_begin_sample(s);
         // Through the lobe.
-        vec2 u = vec2(reference_random(), reference_random());
+        vec2 u = reference_random2();
         vec3 l;
         if (diffuse) {
             float r = sqrt(u.x);
@@ -320,9 +384,9 @@ void main() {
 #ifdef LAMINA_REFERENCE
     float n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
     shade_begin(world_position, n, v, n_dot_v);
-    reference_state = reference_hash(uint(gl_FragCoord.x)
-        ^ reference_hash(uint(gl_FragCoord.y)
-        ^ reference_hash(uint(frame.params.z) ^ floatBitsToUint(frame.params.w))));
+    reference_pixel = reference_hash(uint(gl_FragCoord.x)
+        ^ reference_hash(uint(gl_FragCoord.y) ^ reference_hash(floatBitsToUint(frame.params.w))));
+    reference_integrals = 0u;
 #ifdef LAMINA_REFERENCE_EVALUATED
     if (SURFACE_MAPS != 0u) {
         tm_surface_begin(surface_uv, gl_FragCoord.xy);

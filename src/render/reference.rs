@@ -10,8 +10,12 @@
 //! weight divided by the albedo E of its white GGX lobe (so that each lobe's samples need no
 //! table), its α floored at the lights' [`MIN_ALPHA`]. The pass interpolates between samples
 //! (the baked table's error study: below 5e-4 at 512 samples). Each frame draws
-//! [`SAMPLES_PER_FRAME`] samples per lobe and light disk per pixel; the host averages frames
-//! in f64 and estimates each pixel's standard error from their spread.
+//! [`SAMPLES_PER_FRAME`] samples per lobe and light disk per pixel, the next of one scrambled
+//! Sobol sequence per integral and pixel that runs on over the frames (randomised quasi-Monte
+//! Carlo: unbiased, and the frames so far stratified together); the host averages frames in
+//! f64 and estimates each pixel's standard error from their spread. Stratified together, the
+//! frames are not independent and that spread overstates the error of their mean; two seeds
+//! measure it, as the studies' noise floor does.
 //!
 //! A stack that varies over the surface has a stack per pixel, which no table over the view
 //! cosine holds: its references evaluate each pixel's lobes in the pass from its maps, with a
@@ -313,7 +317,8 @@ pub struct ReferenceImage {
     pub height: u32,
     /// Linear radiance, rows top to bottom (alpha 1).
     pub pixels: Vec<[f32; 4]>,
-    /// Each pixel's standard error (mean of RGB), from the spread of its frames.
+    /// Each pixel's standard error (mean of RGB), from the spread of its frames: above the
+    /// error of their stratified mean (module docs).
     pub std_error: Vec<f32>,
     /// Samples per lobe per pixel.
     pub spp: u32,

@@ -72,8 +72,10 @@ fn mean(p: &[f32; 4]) -> f64 {
 /// (`reference::render_variant`: the same lobes evaluated at 512 view cosines and interpolated)
 /// under the studio environment: per pixel within 5 of the two images' standard errors
 /// combined, plus 2e-3 of the pixel for the table's interpolation and the lobes' emission
-/// order (the two draw their samples lobe by lobe in their own order). A 2-flux coat, a 6-flux
-/// medium, a diffuse base and a thin slab that transmits.
+/// order (the two draw their samples lobe by lobe in their own order). Sixteen frames each: a
+/// pixel's standard error is its frames' spread, which four frames (three degrees of freedom)
+/// left too uncertain for a bound of five (about one pixel in a thousand past it by chance). A
+/// 2-flux coat, a 6-flux medium, a diffuse base and a thin slab that transmits.
 #[test]
 fn a_uniform_stacks_evaluated_reference_is_its_tabulated_one() {
     let gpu = common::gpu();
@@ -93,13 +95,13 @@ fn a_uniform_stacks_evaluated_reference_is_its_tabulated_one() {
             variant,
             &layers,
             (W, H),
-            convergence(64),
+            convergence(256),
             &mut |_, _| {},
             &AtomicBool::new(false),
         )
         .unwrap()
         .unwrap();
-        let own = evaluated(&mut renderer, variant, &stack, None, 64);
+        let own = evaluated(&mut renderer, variant, &stack, None, 256);
         let (mut worst, mut sum) = (0.0f64, 0.0f64);
         for (i, (t, e)) in tabulated.pixels.iter().zip(&own.pixels).enumerate() {
             let (t, e) = (mean(t), mean(e));
