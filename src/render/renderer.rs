@@ -721,7 +721,10 @@ impl<'g> Renderer<'g> {
                 self.frame_index as f32,
                 f32::from_bits(self.seed),
             ],
-            irradiance: self.environment.irradiance,
+            irradiance: match pass.key.variant.ibl {
+                Ibl::Lamps => self.environment.lamps_irradiance,
+                _ => self.environment.irradiance,
+            },
         };
         let uniforms = Buffer::with_data(
             device,

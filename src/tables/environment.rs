@@ -14,7 +14,8 @@
 //!    the samples. Its levels are spaced in log α ([`matched_alpha_of_mip`]).
 //! 4. The lamps' cube (`ibl=lamps`) is built the first time a pass needs it: the map without
 //!    its lamps ([`crate::tables::lamps`]) converted to a source cube of its own and
-//!    prefiltered as Karis's, its mip 0 the whole map's (a mirror lobe reads the lamps there).
+//!    prefiltered as Karis's, its mips 0 and 1 the whole map's (a sharp lobe reads each lamp's
+//!    own shape there).
 
 use std::f64::consts::PI;
 
@@ -142,6 +143,9 @@ pub struct Environment {
     /// The irradiance's order-2 spherical harmonics ([`irradiance_sh`]), which the forward
     /// pass lights a diffuse base with.
     pub irradiance: [[f32; 4]; 9],
+    /// The same of the map without its lamps, which an `ibl=lamps` pass lights a diffuse base
+    /// with, adding the lamps as lights.
+    pub lamps_irradiance: [[f32; 4]; 9],
     /// [`sampling_tables`], the scene set's `EnvironmentSampling`.
     pub sampling: Buffer,
 }
@@ -160,16 +164,17 @@ impl Environment {
         let (source, source_view) = source_cube(gpu, equirect, desc)?;
         let (cube, view) = prefiltered_cube(
             gpu,
-            (&source_view, &cube_sampler),
-            &source,
+            CubeSources::whole(&source, &source_view, &cube_sampler),
             desc,
             Weighting::Karis,
         )?;
+        let lamps = lamps::extract(equirect);
         Ok(Self {
             cube,
             view,
             matched: None,
-            lamps: lamps::extract(equirect),
+            lamps_irradiance: irradiance_sh(&lamps.residual),
+            lamps,
             lamps_cube: None,
             source,
             source_view,
@@ -190,8 +195,7 @@ impl Environment {
         if self.matched.is_none() {
             self.matched = Some(prefiltered_cube(
                 gpu,
-                (&self.source_view, &self.cube_sampler),
-                &self.source,
+                CubeSources::whole(&self.source, &self.source_view, &self.cube_sampler),
                 self.desc,
                 Weighting::Matched,
             )?);
@@ -209,19 +213,19 @@ impl Environment {
         &self.lamps.lamps
     }
 
-    /// Builds the lamps' cube (`ibl=lamps`) unless built: the map without its lamps converted
-    /// to a cube of its own, then prefiltered as Karis's; its mip 0, which a mirror lobe
-    /// reads, is the whole map's.
+    /// Builds the lamps' cube (`ibl=lamps`) unless built: prefiltered as Karis's, its mips 0
+    /// and 1 from the whole map, the others from the map without its lamps (converted to a
+    /// cube of its own). A lobe sharp enough to read mips 0–1 sees each lamp's own shape there;
+    /// from mip 2 the lamps come from the analytic disks alone (shade.glsl's lobe_lamps).
     pub fn build_lamps(&mut self, gpu: &Gpu) -> Result<()> {
         if self.lamps_cube.is_none() {
-            let (_source, source_view) = source_cube(gpu, &self.lamps.residual, self.desc)?;
-            self.lamps_cube = Some(prefiltered_cube(
-                gpu,
-                (&source_view, &self.cube_sampler),
-                &self.source,
-                self.desc,
-                Weighting::Karis,
-            )?);
+            let (_source, residual_view) = source_cube(gpu, &self.lamps.residual, self.desc)?;
+            let sources = CubeSources {
+                whole_mips: LAMPS_WHOLE_MIPS,
+                rest: &residual_view,
+                ..CubeSources::whole(&self.source, &self.source_view, &self.cube_sampler)
+            };
+            self.lamps_cube = Some(prefiltered_cube(gpu, sources, self.desc, Weighting::Karis)?);
         }
         Ok(())
     }
@@ -297,17 +301,42 @@ fn source_cube(gpu: &Gpu, equirect: &HdrImage, desc: EnvDesc) -> Result<(Image, 
     Ok((source, source_view))
 }
 
-/// A prefiltered cube of `desc.mip_count` mips from the source cube (in `ComputeRead`, with
-/// its view and sampler), its samples weighed by `weighting`: mip 0 a copy of `mirror`'s (a
-/// source cube in `ComputeRead`: the source itself, or the whole map's under a residual's),
-/// mips ≥ 1 the GGX prefilter. Left in `FragmentRead`, the sources back in `ComputeRead`.
+/// How many mips of the lamps' cube hold the whole map, lamps included.
+const LAMPS_WHOLE_MIPS: u32 = 2;
+
+/// The source cubes (in `ComputeRead`) a prefiltered cube reads: mips below `whole_mips` from
+/// the whole map's (`whole`, with its view), the others from `rest` (the whole map's view
+/// again, or the view of a cube of the map without its lamps), all through `sampler`.
+struct CubeSources<'a> {
+    whole: (&'a Image, &'a ImageView),
+    whole_mips: u32,
+    rest: &'a ImageView,
+    sampler: &'a Sampler,
+}
+
+impl<'a> CubeSources<'a> {
+    /// Every mip from the whole map's source cube.
+    fn whole(image: &'a Image, view: &'a ImageView, sampler: &'a Sampler) -> Self {
+        Self {
+            whole: (image, view),
+            whole_mips: 1,
+            rest: view,
+            sampler,
+        }
+    }
+}
+
+/// A prefiltered cube of `desc.mip_count` mips from `sources`, its samples weighed by
+/// `weighting`: mip 0 a copy of the whole map's source, mips ≥ 1 the GGX prefilter of the
+/// source [`CubeSources`] names for each. Left in `FragmentRead`, the sources back in
+/// `ComputeRead`.
 fn prefiltered_cube(
     gpu: &Gpu,
-    (source_view, sampler): (&ImageView, &Sampler),
-    mirror: &Image,
+    sources: CubeSources,
     desc: EnvDesc,
     weighting: Weighting,
 ) -> Result<(Image, ImageView)> {
+    let (mirror, whole_view) = sources.whole;
     let device = &gpu.device;
     let name = match weighting {
         Weighting::Karis => "environment prefiltered cube",
@@ -322,7 +351,12 @@ fn prefiltered_cube(
     for mip in 1..desc.mip_count {
         let view = cube.mip_view(mip, &format!("{name} mip {mip}"))?;
         let mut set = DescriptorSet::new(device, &prefilter.set_layout, "prefilter")?;
-        set.write(0, Resource::Sampled(source_view, sampler))
+        let source_view = if mip < sources.whole_mips {
+            whole_view
+        } else {
+            sources.rest
+        };
+        set.write(0, Resource::Sampled(source_view, sources.sampler))
             .write(1, Resource::Storage(&view));
         targets.push((mip, view, set));
     }

@@ -76,13 +76,14 @@ fn luminance(p: [f32; 4]) -> f64 {
 
 /// `lamps` as an `ibl=lamps` pass holds them: per slot the direction with tan(θ/2) of the
 /// angular radius θ (the roughness a disk adds to a lobe, `lib/light.glsl`'s `light_alpha`),
-/// then the irradiance and 0; the slots past the lamps dark.
+/// then the irradiance and 1; the slots past the lamps all 0, so that a pass specialized to
+/// them drops their code.
 pub fn lamp_values(lamps: &[Lamp]) -> [f32; LAMP_VALUES] {
     let mut out = [0.0; LAMP_VALUES];
     for (slot, lamp) in out.chunks_exact_mut(8).zip(lamps) {
         let (d, e) = (lamp.direction, lamp.irradiance);
         let t = (0.5 * lamp.angular_radius).tan();
-        let v = [d.x, d.y, d.z, t, e[0], e[1], e[2], 0.0];
+        let v = [d.x, d.y, d.z, t, e[0], e[1], e[2], 1.0];
         slot.iter_mut().zip(v).for_each(|(o, v)| *o = v as f32);
     }
     out

@@ -177,7 +177,9 @@ fn under_the_studio_the_lighting_error_falls_from_split_sum_to_matched_to_taps()
 }
 
 /// Under the studio every preset (maps, diffuse base, 6-flux, thin slab) renders finite under
-/// `ibl=lamps`, and its lamps change the image the split sum gives.
+/// `ibl=lamps`, and its lamps change the image the split sum gives: through a lobe rougher
+/// than the lamps' cube's mip 1, or a diffuse base (glazed ceramic's glaze, α = 0.02, reads
+/// the whole map within mip 1 and so sees the split sum's image; its base does not).
 #[test]
 fn every_preset_renders_under_the_studio_lamps() {
     let gpu = common::gpu();

@@ -31,7 +31,7 @@ vec3 shade_behind(vec3 n, vec3 d) {
 // `ibl=split-sum`, Karis's cube along Lagarde's dominant direction at the lobe's own mip;
 // `ibl=matched`, the matched cube where its kernel comes closest to the lobe in L²
 // (lib/ibl.glsl's ibl_lobe_fit); `ibl=lamps` as the split sum, from Karis's cube of the map
-// without its lamps above mip 0 (tables::lamps), which the `matched` binding then holds
+// without its lamps from mip 2 (tables::lamps), which the `matched` binding then holds
 // (lobe_lamps adds them); the others, the matched cube along the lobe's mean direction at the
 // mip of its spread (ibl_lobe_moments), `ibl=anisotropic` in two fetches that match its second
 // moments too. A mirror lobe reads mip 0, the whole map, along `r` either way.
@@ -69,7 +69,7 @@ vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
         mip = ibl_matched_mip_of_alpha(moments.y * moments.y, frame.params.x);
     }
     dir = behind ? shade_behind(n, dir) : dir;
-    shade_lamps_share = clamp(mip, 0.0, 1.0);
+    shade_lamps_share = clamp(mip - 1.0, 0.0, 1.0);
     return IBL == IBL_SPLIT_SUM ? textureLod(prefiltered, dir, mip).rgb
                                 : textureLod(matched, dir, mip).rgb;
 }
@@ -153,23 +153,29 @@ vec3 lobe_lights(float alpha, bool retro, bool behind, vec2 top) {
 // as constants, generated/layer_values.glsl's ibl_lamp) send back through a lobe of unit
 // weight and roughness α, as lobe_lights lights a disk light, but normalised once per lobe, by
 // the white lobe's albedo at α. Times the share of the lobe's fetch that read the cube
-// without them (shade_lamps_share): none at mip 0, which holds the whole map, all from mip 1.
+// without them (shade_lamps_share): none up to mip 1, which holds the whole map (each lamp's own
+// shape for a near-mirror lobe), all from mip 2. A slot without a lamp (.w of its irradiance
+// 0, a constant) drops out when the pass is specialized.
 vec3 lobe_lamps(float alpha, bool retro, bool behind, vec2 top) {
     vec3 sum = vec3(0.0);
     float albedo = white_albedo(shade_n_dot_v, max(alpha, LIGHT_ALPHA_FLOOR));
     [[unroll]] for (uint k = 0u; k < IBL_LAMP_COUNT; ++k) {
         vec4 lamp = ibl_lamp(2u * k);
-        vec3 l = behind ? shade_behind(shade_n, lamp.xyz) : lamp.xyz;
-        float a = light_alpha_widened(alpha, lamp.w);
-        sum += ibl_lamp(2u * k + 1u).rgb
-            * light_lobe_with(shade_n, shade_v, shade_n_dot_v, l, a, retro, top, albedo);
+        vec4 irradiance = ibl_lamp(2u * k + 1u);
+        if (irradiance.w > 0.0) {
+            vec3 l = behind ? shade_behind(shade_n, lamp.xyz) : lamp.xyz;
+            float a = light_alpha_widened(alpha, lamp.w);
+            sum += irradiance.rgb
+                * light_lobe_with(shade_n, shade_v, shade_n_dot_v, l, a, retro, top, albedo);
+        }
     }
     return shade_lamps_share * sum;
 }
 
 // What a Lambertian lobe of unit weight sends back (src/model/diffuse.rs): the irradiance at
 // the point over π — the lights' E·max(n·l, 0), and the environment's, cosine-convolved
-// (its order-2 spherical harmonics, tables::environment::irradiance_sh).
+// (its order-2 spherical harmonics, tables::environment::irradiance_sh). Under `ibl=lamps`
+// the harmonics are those of the map without its lamps, and the lamps are lit as the lights.
 vec3 diffuse_light() {
     vec3 sum = vec3(0.0);
     uint count = LIGHTS != 0u ? light_info.x : 0u;
@@ -180,7 +186,16 @@ vec3 diffuse_light() {
     }
     float scale = frame.params.y;
     if (scale > 0.0) {
-        sum += scale * ibl_irradiance(shade_n, frame.irradiance);
+        vec3 lamps = vec3(0.0);
+        if (IBL == IBL_LAMPS) {
+            [[unroll]] for (uint k = 0u; k < IBL_LAMP_COUNT; ++k) {
+                vec4 irradiance = ibl_lamp(2u * k + 1u);
+                if (irradiance.w > 0.0) {
+                    lamps += irradiance.rgb * max(dot(shade_n, ibl_lamp(2u * k).xyz), 0.0);
+                }
+            }
+        }
+        sum += scale * (ibl_irradiance(shade_n, frame.irradiance) + lamps);
     }
     return sum * INV_PI;
 }
