@@ -95,16 +95,17 @@ uint reference_scramble(uint x, uint seed) {
 }
 
 // The second dimension of Sobol's sequence at index i: the XOR of the direction numbers of
-// i's set bits, v₁ = 2³¹ and v_{j+1} = v_j ⊕ v_j/2 (primitive polynomial x + 1). The first
-// dimension is i's reversed bits (van der Corput).
+// i's set bits, v₀ = 2³¹ and v_{j+1} = v_j ⊕ v_j/2 (primitive polynomial x + 1), so v_j's bit
+// 31 − r is C(j, r) mod 2, 1 where r's bits are among j's (Lucas). Bit 31 − r of the sum is
+// then the XOR of i's bits at the positions j ⊇ r: five steps of the superset transform, then
+// the bits reversed. The first dimension is i's reversed bits (van der Corput).
 uint reference_sobol1(uint i) {
-    uint v = 1u << 31u;
-    uint x = 0u;
-    for (uint j = 0u; j < 32u; ++j) {
-        x ^= (i & (1u << j)) != 0u ? v : 0u;
-        v ^= v >> 1u;
-    }
-    return x;
+    i ^= (i >> 1u) & 0x55555555u;
+    i ^= (i >> 2u) & 0x33333333u;
+    i ^= (i >> 4u) & 0x0f0f0f0fu;
+    i ^= (i >> 8u) & 0x00ff00ffu;
+    i ^= (i >> 16u) & 0x0000ffffu;
+    return bitfieldReverse(i);
 }
 
 // The sample's next pair of numbers, uniform in [0, 1)²: the first two dimensions of Sobol's

@@ -50,7 +50,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", default_value_t = 1024, requires = "reference")]
     spp: u32,
     /// With --reference: stop earlier once the image's relative noise (RMS standard error
-    /// over mean radiance) is at most this, e.g. 0.005.
+    /// over mean radiance, from the frames' spread, which overstates it: the frames are
+    /// stratified together) is at most this, e.g. 0.005.
     #[arg(long, value_name = "X", requires = "reference")]
     noise: Option<f64>,
     /// With --reference: the samples' seed (any u64); two seeds give two independent
@@ -291,7 +292,7 @@ fn print_reference(
     println!("truth:       {truth}");
     println!(
         "size:        {width}x{height}\nreference:   {} samples per lobe and pixel from seed {}, \
-         relative noise {:.2e}",
+         relative noise at most {:.2e}",
         image.spp, args.seed, image.noise
     );
     println!(

@@ -324,7 +324,8 @@ pub struct ReferenceImage {
     pub spp: u32,
     /// The image's relative noise: the RMS over the pixels that vary between frames of each
     /// one's standard error over its radiance (mean of RGB; radiances below 1 % of the image's
-    /// mean count as that), so a few bright pixels do not hide the rest.
+    /// mean count as that), so a few bright pixels do not hide the rest. Above the noise
+    /// two seeds show, as each pixel's standard error is.
     pub noise: f64,
 }
 
