@@ -151,6 +151,7 @@ pub fn count_plans(
     let pool = Pool {
         plans: plans.to_vec(),
         scene,
+        env: None,
         lighting,
         sizes,
     };
@@ -158,10 +159,13 @@ pub fn count_plans(
     Ok(counts.remove(0))
 }
 
-/// Plans counted with one scene, lighting and pair of sizes: a worker draws one of each.
+/// Plans counted with one scene, environment, lighting and pair of sizes: a worker draws one of
+/// each.
 pub struct Pool<'a> {
     pub plans: Vec<&'a Plan>,
     pub scene: Scene,
+    /// The environment map the worker lights with; `None`: the setup's.
+    pub env: Option<&'a Path>,
     pub lighting: &'a Lighting,
     pub sizes: CounterSizes,
 }
@@ -214,7 +218,7 @@ pub fn count_pools(
         .map(|i| CountRequest {
             exe: &setup.exe,
             global_args: setup.global_args.clone(),
-            env_map: &setup.env_map,
+            env_map: pools[i].env.unwrap_or(&setup.env_map),
             cases: &cases[i],
             scene: pools[i].scene,
             lighting: lighting[i].as_deref(),

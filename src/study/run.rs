@@ -89,7 +89,7 @@ pub fn time(
 pub type StudyCounts = (CounterInfo, Vec<CaseCounts>);
 
 /// Counts the instructions of every study that asks for them, in one pool of workers per
-/// scene, counter sizes and lighting (so a suite starts its workers and compiles each shader
+/// scene, environment, counter sizes and lighting (so a suite starts its workers and compiles each shader
 /// under valgrind once, not once per study), the pools' workers in one queue: per study, its
 /// counts, or `None` when it does not count. Needs only the studies' plans, so it may run
 /// beside their timing.
@@ -98,12 +98,16 @@ pub fn count(
     setup: &CounterSetup,
     progress: impl FnMut(usize, usize),
 ) -> Result<Vec<Option<StudyCounts>>> {
-    // One pool of workers per scene, counted sizes and lighting: a worker draws one of each.
+    // One pool of workers per scene, environment, counted sizes and lighting: a worker draws
+    // one of each. A study's own environment is counted under it: what `ibl=lamps` compiles
+    // depends on the map's lamps.
     let mut pools: Vec<(Pool<'_>, Vec<usize>)> = Vec::new();
     for (i, s) in studies.iter().enumerate() {
         let Some(sizes) = s.counter else { continue };
-        let same =
-            |p: &Pool<'_>| p.scene == s.scene && p.sizes == sizes && *p.lighting == s.lighting;
+        let env = s.env.as_deref();
+        let same = |p: &Pool<'_>| {
+            p.scene == s.scene && p.env == env && p.sizes == sizes && *p.lighting == s.lighting
+        };
         match pools.iter_mut().find(|(p, _)| same(p)) {
             Some((pool, members)) => {
                 pool.plans.push(&s.plan);
@@ -113,6 +117,7 @@ pub fn count(
                 Pool {
                     plans: vec![&s.plan],
                     scene: s.scene,
+                    env,
                     lighting: &s.lighting,
                     sizes,
                 },
