@@ -642,6 +642,57 @@ fn a_suite_counts_studies_lit_differently_each_under_its_own_lights() {
     assert!(lit > dark + 50.0, "lit {lit} against dark {dark}");
 }
 
+/// A study with its own `env` is counted under it: an `ibl=lamps` pass compiles the lamps of
+/// its map (the studio's four, the sunset's one), so the two studies' counts differ.
+#[test]
+fn a_suite_counts_a_study_under_its_own_environment() {
+    let dir = common::scratch_dir("sweep-env-suite");
+    std::fs::copy(
+        common::repo_path("assets/env/sunset.exr"),
+        dir.join("sunset.exr"),
+    )
+    .unwrap();
+    let study = |name: &str, env: &str| {
+        format!(
+            "name = \"{name}\"\nmaterials = [\"gold\"]\nbase = \"model=tm2,mode=specialized\"\n\
+             {env}size = \"16x16\"\nframes = 1\nwarmup = 0\ncounter = \"instructions\"\n\
+             counter_sizes = [\"8x8\", \"16x16\"]\n[[axis]]\nname = \"ibl\"\nvalues = [\"lamps\"]\n"
+        )
+    };
+    std::fs::write(dir.join("studio.toml"), study("studio", "")).unwrap();
+    std::fs::write(
+        dir.join("sunset.toml"),
+        study("sunset", "env = \"sunset.exr\"\n"),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("suite.toml"),
+        "name = \"both\"\nstudies = [\"studio.toml\", \"sunset.toml\"]\n",
+    )
+    .unwrap();
+    let out = lamina(
+        &["--validation", "sweep", "suite.toml", "--out", "res"],
+        &dir,
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let per_pixel = |name: &str| {
+        let path = dir.join("res").join(name).join("results.json");
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
+        let runs = json["runs"].as_array().unwrap();
+        let lamps = runs
+            .iter()
+            .find(|r| r["variant"].as_str().unwrap().contains("ibl=lamps"))
+            .unwrap();
+        lamps["instructions_per_pixel"].as_f64().unwrap()
+    };
+    let (studio, sunset) = (per_pixel("studio"), per_pixel("sunset"));
+    assert!(
+        studio > sunset + 50.0,
+        "studio {studio} against sunset {sunset}"
+    );
+}
+
 /// On lavapipe pinned to one thread, the tables are built first in a child process on every
 /// core, into the cache the run then reads.
 #[test]
