@@ -605,6 +605,42 @@ fn a_suite_runs_the_studies_named_and_refuses_others() {
     assert!(!err.contains("panicked"), "{err}");
 }
 
+/// Runs a suite of `studies` (name, file text) in `dir` and answers, per study, the JIT
+/// instructions per shaded pixel of its first run whose variant holds `variant`.
+fn suite_counts(dir: &std::path::Path, studies: &[(&str, String)], variant: &str) -> Vec<f64> {
+    for (name, body) in studies {
+        std::fs::write(dir.join(format!("{name}.toml")), body).unwrap();
+    }
+    let files: Vec<String> = studies
+        .iter()
+        .map(|(n, _)| format!("\"{n}.toml\""))
+        .collect();
+    std::fs::write(
+        dir.join("suite.toml"),
+        format!("name = \"both\"\nstudies = [{}]\n", files.join(", ")),
+    )
+    .unwrap();
+    let out = lamina(
+        &["--validation", "sweep", "suite.toml", "--out", "res"],
+        dir,
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    studies
+        .iter()
+        .map(|(name, _)| {
+            let path = dir.join("res").join(name).join("results.json");
+            let json: serde_json::Value =
+                serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
+            let runs = json["runs"].as_array().unwrap();
+            let run = runs
+                .iter()
+                .find(|r| r["variant"].as_str().unwrap().contains(variant))
+                .unwrap();
+            run["instructions_per_pixel"].as_f64().unwrap()
+        })
+        .collect()
+}
+
 #[test]
 fn a_suite_counts_studies_lit_differently_each_under_its_own_lights() {
     let dir = common::scratch_dir("sweep-lit-suite");
@@ -615,29 +651,13 @@ fn a_suite_counts_studies_lit_differently_each_under_its_own_lights() {
              [[axis]]\nname = \"model\"\nvalues = [\"ggx\"]\n"
         )
     };
-    std::fs::write(dir.join("dark.toml"), study("dark", "")).unwrap();
-    std::fs::write(
-        dir.join("lit.toml"),
-        study("lit", "lights = \"sun-only\"\n"),
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("suite.toml"),
-        "name = \"both\"\nstudies = [\"dark.toml\", \"lit.toml\"]\n",
-    )
-    .unwrap();
-    let out = lamina(
-        &["--validation", "sweep", "suite.toml", "--out", "res"],
-        &dir,
-    );
-    assert!(out.status.success(), "{}", text(&out.stderr));
-    let per_pixel = |name: &str| {
-        let path = dir.join("res").join(name).join("results.json");
-        let json: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
-        json["runs"][0]["instructions_per_pixel"].as_f64().unwrap()
+    let studies = [
+        ("dark", study("dark", "")),
+        ("lit", study("lit", "lights = \"sun-only\"\n")),
+    ];
+    let [dark, lit] = suite_counts(&dir, &studies, "model=ggx")[..] else {
+        unreachable!("one count per study");
     };
-    let (dark, lit) = (per_pixel("dark"), per_pixel("lit"));
     // The sun's loop runs only in the lit study's pipeline.
     assert!(lit > dark + 50.0, "lit {lit} against dark {dark}");
 }
@@ -659,34 +679,13 @@ fn a_suite_counts_a_study_under_its_own_environment() {
              counter_sizes = [\"8x8\", \"16x16\"]\n[[axis]]\nname = \"ibl\"\nvalues = [\"lamps\"]\n"
         )
     };
-    std::fs::write(dir.join("studio.toml"), study("studio", "")).unwrap();
-    std::fs::write(
-        dir.join("sunset.toml"),
-        study("sunset", "env = \"sunset.exr\"\n"),
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("suite.toml"),
-        "name = \"both\"\nstudies = [\"studio.toml\", \"sunset.toml\"]\n",
-    )
-    .unwrap();
-    let out = lamina(
-        &["--validation", "sweep", "suite.toml", "--out", "res"],
-        &dir,
-    );
-    assert!(out.status.success(), "{}", text(&out.stderr));
-    let per_pixel = |name: &str| {
-        let path = dir.join("res").join(name).join("results.json");
-        let json: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
-        let runs = json["runs"].as_array().unwrap();
-        let lamps = runs
-            .iter()
-            .find(|r| r["variant"].as_str().unwrap().contains("ibl=lamps"))
-            .unwrap();
-        lamps["instructions_per_pixel"].as_f64().unwrap()
+    let studies = [
+        ("studio", study("studio", "")),
+        ("sunset", study("sunset", "env = \"sunset.exr\"\n")),
+    ];
+    let [studio, sunset] = suite_counts(&dir, &studies, "ibl=lamps")[..] else {
+        unreachable!("one count per study");
     };
-    let (studio, sunset) = (per_pixel("studio"), per_pixel("sunset"));
     assert!(
         studio > sunset + 50.0,
         "studio {studio} against sunset {sunset}"
