@@ -558,7 +558,6 @@ fn print_accuracy(accuracy: &fgd_study::Accuracy) {
     }
     println!(
         "fgd=belcour reads a 64³ dielectric table for η < 1 (the basis has no total internal \
-         reflection); beyond κ = 4 the 4-D tables go on from their edge along the split sum's \
-         slope in F0."
+         reflection); the 4-D tables clamp κ to [0, 4]."
     );
 }

@@ -505,26 +505,6 @@ impl Grid {
     }
 }
 
-/// What the 4-D tables add to the value at their domain's edge for an (η, κ) beyond it (0
-/// within): the split sum's slope of FGD in F0, A(μ, α), times the rise of F0 from the edge.
-/// Exact at normal incidence; for aluminium's κ (9.2, 6.3, 4.8) within 0.033 of the exact
-/// FGD at μ ≥ 0.2 (0.034 resampled), where clamping κ to the edge is 0.22 off
-/// (`tests/suite/fgd.rs`).
-/// `fgd_stacked` in `glsl/include/lib/fgd.glsl`.
-pub fn beyond_the_table(
-    split_sum: &SplitSumTable,
-    mu: f64,
-    alpha: f64,
-    eta: f64,
-    kappa: f64,
-) -> f64 {
-    if eta <= ETA_MAX && kappa <= KAPPA_MAX {
-        return 0.0;
-    }
-    let edge = fresnel::f0(eta.min(ETA_MAX), kappa.min(KAPPA_MAX));
-    split_sum.sample(mu, alpha)[0] * (fresnel::f0(eta, kappa) - edge)
-}
-
 /// [`FgdTwin`] (with the split-sum table for `karis`) as an FGD provider of the f64 model.
 pub struct FgdLookup<'a> {
     pub twin: &'a FgdTwin,
@@ -549,8 +529,7 @@ impl crate::model::Fgd for FgdLookup<'_> {
                 let s0 = (g.floor() as u32).min(slices - 2);
                 let lo = grid.trilinear(m, a, e, s0);
                 let hi = grid.trilinear(m, a, e, s0 + 1);
-                let value = lo + (hi - lo) * (g - f64::from(s0));
-                value + beyond_the_table(self.split_sum, mu, alpha, eta, kappa)
+                lo + (hi - lo) * (g - f64::from(s0))
             }
             FgdTwin::Belcour { table, below } => {
                 if kappa <= 0.0 && eta < 1.0 {
@@ -559,7 +538,9 @@ impl crate::model::Fgd for FgdLookup<'_> {
                     return below.trilinear(at(mu), at(alpha), at(eta), 0);
                 }
                 let p = table.basis.fold(table.sample(mu, alpha));
-                fresnel::f0(eta, kappa) * p[0]
+                let f0 =
+                    ((eta - 1.0).powi(2) + kappa * kappa) / ((eta + 1.0).powi(2) + kappa * kappa);
+                f0 * p[0]
                     + p[1]
                     + fresnel::conductor(super::belcour::CT1, eta, kappa) * p[2]
                     + fresnel::conductor(super::belcour::CT2, eta, kappa) * p[3]
