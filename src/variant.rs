@@ -480,6 +480,11 @@ impl Default for ShadeSpec {
 const AXIS_ENTRIES: usize = 32;
 const VALUE_ENTRIES: usize = (MAX_LAYERS_LIMIT * VALUES_PER_LAYER) as usize;
 
+/// The bit of the `fgd` constant (id 3, `FGD_SPEC`) above the axis's code that holds a pass's
+/// `FGD_PAST_EDGE`: the stack's lookups may fall past the 4-D table's domain
+/// (`render::pass::past_fgd_edge`), and the code that carries FGD on from its edge stays.
+pub const FGD_PAST_EDGE_SHIFT: u32 = 8;
+
 /// Lamp slots an `ibl=lamps` pass holds (`tables::lamps::MAX_LAMPS`).
 pub const LAMP_SLOTS: usize = 4;
 

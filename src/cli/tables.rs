@@ -558,6 +558,7 @@ fn print_accuracy(accuracy: &fgd_study::Accuracy) {
     }
     println!(
         "fgd=belcour reads a 64³ dielectric table for η < 1 (the basis has no total internal \
-         reflection); the 4-D tables clamp κ to [0, 4]."
+         reflection); beyond κ = 4 the 4-D tables go on from their edge along the split sum's \
+         slope in F0."
     );
 }

@@ -2,6 +2,12 @@
 
 /// Dielectric interface of relative IOR η = n_t/n_i at incidence cosine `c`; 1 under total
 /// internal reflection and for η = 0 (nothing to transmit into).
+/// Normal-incidence reflectance of relative complex IOR η + iκ (`f0_channel` in
+/// `glsl/include/lib/fresnel.glsl`): ((η − 1)² + κ²) / ((η + 1)² + κ²).
+pub fn f0(eta: f64, kappa: f64) -> f64 {
+    ((eta - 1.0).powi(2) + kappa * kappa) / ((eta + 1.0).powi(2) + kappa * kappa)
+}
+
 pub fn dielectric(c: f64, eta: f64) -> f64 {
     let c = c.clamp(0.0, 1.0);
     let ct2 = 1.0 - (1.0 - c * c) / (eta * eta).max(1e-12);

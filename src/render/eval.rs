@@ -133,9 +133,11 @@ impl<'g> GpuEvaluator<'g> {
         let kernel = if variant.mode.per_material() {
             None
         } else {
-            // With the transmitted lobe's code, so that every stack reports its roughness.
+            // With the transmitted lobe's code, so that every stack reports its roughness,
+            // and the code past the 4-D FGD table's edge, which any stack may reach.
             let mut spec = variant.spec();
             spec.transmits = 1;
+            spec.fgd |= 1 << crate::variant::FGD_PAST_EDGE_SHIFT;
             Some(Self::kernel(gpu, &inputs, variant, spec)?)
         };
         Ok(Self {

@@ -17,7 +17,9 @@ use crate::shader::specialize::{
     check_generic_fit, specialize_values, BakedShape, SpecializeError, Structure,
 };
 
-use crate::variant::{Mode, Model, ShadeSpec, Transport, VariantKey, LAMP_VALUES};
+use crate::variant::{
+    Mode, Model, ShadeSpec, Transport, VariantKey, FGD_PAST_EDGE_SHIFT, LAMP_VALUES,
+};
 
 use super::classes::{Class, Routing};
 use super::forward::ForwardPass;
@@ -62,6 +64,10 @@ pub struct PassKey {
     pub transmits: bool,
     /// The scene has analytic lights (`LIGHTS`).
     pub lights: bool,
+    /// Some FGD lookup of the stack may fall past the 4-D table's η, κ ≤ 4
+    /// ([`past_fgd_edge`]): the pass holds the code that carries FGD on from the table's edge
+    /// (`FGD_PAST_EDGE`); without it that code folds away.
+    pub fgd_past_edge: bool,
     /// `ibl=lamps`: the environment's lamps (`tables::lamps::lamp_values`), which the
     /// renderer sets when it builds the pass; zero otherwise.
     pub lamps: [f32; LAMP_VALUES],
@@ -117,6 +123,7 @@ impl PassKey {
                     diffuse: ends_diffuse(layers),
                     transmits: ends_transmissive(layers),
                     lights: !lighting.lights.is_empty(),
+                    fgd_past_edge: past_fgd_edge(layers, Some(surface)),
                     lamps: [0.0; LAMP_VALUES],
                 });
             }
@@ -140,6 +147,7 @@ impl PassKey {
             diffuse: ends_diffuse(layers),
             transmits: ends_transmissive(layers),
             lights: !lighting.lights.is_empty(),
+            fgd_past_edge: past_fgd_edge(layers, surface),
             lamps: [0.0; LAMP_VALUES],
         })
     }
@@ -166,6 +174,7 @@ impl PassKey {
             diffuse: ends_diffuse(layers),
             transmits: ends_transmissive(layers),
             lights: !lighting.lights.is_empty(),
+            fgd_past_edge: past_fgd_edge(layers, None),
             lamps: [0.0; LAMP_VALUES],
         }
     }
@@ -186,6 +195,7 @@ impl PassKey {
             diffuse: ends_diffuse(layers),
             transmits: ends_transmissive(layers),
             lights: !lighting.lights.is_empty(),
+            fgd_past_edge: past_fgd_edge(layers, surface),
             lamps: [0.0; LAMP_VALUES],
         }
     }
@@ -234,6 +244,7 @@ impl PassKey {
         spec.diffuse_base = u32::from(self.diffuse);
         spec.transmits = u32::from(self.transmits);
         spec.lights = u32::from(self.lights);
+        spec.fgd |= u32::from(self.fgd_past_edge) << FGD_PAST_EDGE_SHIFT;
         spec.lamps = self.lamps;
         spec
     }
@@ -286,6 +297,14 @@ impl PassKey {
                 self.variant,
                 base(self.diffuse, self.transmits),
                 base(diffuse, transmits)
+            )));
+        }
+        if past_fgd_edge(layers, None) && !self.fgd_past_edge {
+            return Err(Error::Unsupported(format!(
+                "this pass ({}) was built for a stack whose FGD lookups stay within the 4-D \
+                 table's η, κ ≤ {}, and this one reaches past it; prepare a pass for this stack",
+                self.variant,
+                crate::tables::fgd::KAPPA_MAX
             )));
         }
         let same = match &self.material {
@@ -378,6 +397,32 @@ impl PassCache {
     }
 }
 
+/// Whether some FGD lookup of `layers` (with the maps of `surface`) may fall past the 4-D
+/// table's domain, η and κ in [0, 4] (`tables::fgd::beyond_the_table`): an interface whose
+/// relative η (either way for a dielectric, from above for a conductor) or relative κ lies
+/// past it in some channel, each layer against the one above it (air at the top), or maps that vary η or κ (`SurfaceMaps::spec_bits`' bits 0
+/// and 1), whose values the host does not bound.
+pub fn past_fgd_edge(layers: &[LayerParams], surface: Option<&Surface>) -> bool {
+    use crate::tables::fgd::{ETA_MAX, KAPPA_MAX};
+    if surface.is_some_and(|s| s.maps.spec_bits() & 0b11 != 0) {
+        return true;
+    }
+    let mut above = [crate::model::IOR_AIR; 3];
+    for layer in layers.iter().filter(|l| !l.is_diffuse()) {
+        let past = (0..3).any(|c| {
+            let (a, b) = (above[c], layer.ior[c]);
+            // A conductor is looked up from above only; a dielectric both ways.
+            let upward = !layer.is_conductor() && a > ETA_MAX * b;
+            b > ETA_MAX * a || upward || layer.kappa[c] > KAPPA_MAX * a
+        });
+        if past {
+            return true;
+        }
+        above = layer.ior;
+    }
+    false
+}
+
 /// Whether `pass` was prepared for `key`: the same key but for the lamps, which the renderer
 /// sets.
 fn requested(pass: &ForwardPass, key: &PassKey) -> bool {
@@ -424,5 +469,36 @@ mod tests {
         assert!(PassKey::uniform(baked, &varnished, &Lighting::default()).is_ok());
         assert!(PassKey::uniform(key("model=tm2,mode=baked"), &varnished, &sun).is_ok());
         assert!(PassKey::uniform(baked, &gold, &sun).is_ok());
+    }
+
+    #[test]
+    fn only_stacks_past_the_4d_fgd_tables_edge_hold_its_code() {
+        let preset = |name: &str| crate::material::Stack::resolve(name).unwrap().params();
+        // Gold's η 0.14 is a conductor's, looked up from above only; its κ ≤ 4.
+        for name in ["gold", "varnished-gold", "glazed-ceramic", "amber-glass"] {
+            assert!(!past_fgd_edge(&preset(name), None), "{name}");
+        }
+        // Aluminium's κ 9.2; under a coat of 1.5, 6.2: past either way.
+        assert!(past_fgd_edge(&preset("aluminium"), None));
+        assert!(past_fgd_edge(&preset("absorbing-film"), None));
+        // A dielectric of η 4.5 under air; one of 0.45 under 2 (4.4 going up), not 2 alone.
+        assert!(past_fgd_edge(&[LayerParams::dielectric(4.5, 0.2)], None));
+        let two = LayerParams::dielectric(2.0, 0.2);
+        assert!(past_fgd_edge(
+            &[two, LayerParams::dielectric(0.45, 0.2)],
+            None
+        ));
+        assert!(!past_fgd_edge(&[two], None));
+        // A pass built without the code refuses a stack that needs it, by name.
+        let variant: VariantKey = "model=tm2".parse().unwrap();
+        let lighting = Lighting::default();
+        let gold = PassKey::uniform(variant, &preset("gold"), &lighting).unwrap();
+        assert!(!gold.fgd_past_edge);
+        let error = gold.admits(&preset("aluminium")).unwrap_err().to_string();
+        assert!(error.contains("4-D table"), "{error}");
+        let aluminium = PassKey::uniform(variant, &preset("aluminium"), &lighting).unwrap();
+        assert!(aluminium.admits(&preset("gold")).is_ok());
+        assert_eq!(aluminium.spec(None).fgd >> FGD_PAST_EDGE_SHIFT, 1);
+        assert_eq!(gold.spec(None).fgd, variant.spec().fgd);
     }
 }

@@ -187,8 +187,8 @@ pub const LOBE_ALBEDO_SIZE: u32 = 64;
 /// `glsl/include/lib/ibl.glsl`). The host builds it at this size (`tables::lobe_moments`).
 pub const LOBE_MOMENTS_SIZE: u32 = 32;
 
-/// The 4-D FGD table's domain in η and κ: [0, 4] each (ALGORITHMS.md §6.1); beyond it,
-/// clamped. `FGD_ETA_MAX` and `FGD_KAPPA_MAX` in `glsl/include/lib/fgd.glsl`.
+/// The 4-D FGD table's domain in η and κ: [0, 4] each (ALGORITHMS.md §6.1); beyond it, the
+/// value at its edge carried on (`tables::fgd::beyond_the_table`). `FGD_ETA_MAX` and `FGD_KAPPA_MAX` in `glsl/include/lib/fgd.glsl`.
 pub const FGD_ETA_MAX: f64 = 4.0;
 pub const FGD_KAPPA_MAX: f64 = 4.0;
 

@@ -279,7 +279,7 @@ pub fn load_belcour(
     BelcourTable::load_or_build(gpu, G2_FORM, size, samples, cache_dir)
 }
 
-/// The split-sum table the probes bind (unused by the FGD modes measured here, but bound).
+/// The split-sum table the probes bind (the 4-D tables read it beyond their κ).
 pub fn probe_split_table(gpu: &Gpu) -> Result<SplitSumTable> {
     SplitSumTable::load_or_build(
         gpu,

@@ -160,8 +160,7 @@ impl SplitSumTable {
 impl crate::model::Fgd for SplitSumTable {
     fn fgd(&self, mu: f64, alpha: f64, eta: f64, kappa: f64) -> f64 {
         let [a, b] = self.sample(mu, alpha);
-        let f0 = ((eta - 1.0).powi(2) + kappa * kappa) / ((eta + 1.0).powi(2) + kappa * kappa);
-        f0 * a + b
+        crate::model::fresnel::f0(eta, kappa) * a + b
     }
 }
 

@@ -15,7 +15,7 @@
 // Texels per axis of the vertex-centred grids (the host builds them at this size).
 const float FGD_N = float(LAMINA_FGD_SIZE);
 // The 4-D table's domain in η and κ (FGD_ETA_MAX, FGD_KAPPA_MAX: [0, 4] each, ALGORITHMS.md
-// §6.1; beyond it, clamped) and the cosines where the Belcour projection interpolates F exactly
+// §6.1; beyond it, carried on from its edge: fgd_stacked) and the cosines where the Belcour projection interpolates F exactly
 // (BELCOUR_CT1, BELCOUR_CT2, §7.2) come from src/shader/interface.rs through
 // generated/codes.glsl.
 
@@ -42,7 +42,15 @@ float fgd_stacked(float mu, float alpha, float eta, float kappa) {
     float z0 = (s0 * FGD_N + fe + 0.5) / depth;
     float a = texture(fgd_table, vec3(xy, z0)).r;
     float b = texture(fgd_table, vec3(xy, z0 + FGD_N / depth)).r;
-    return mix(a, b, g - s0);
+    float value = mix(a, b, g - s0);
+    if (FGD_PAST_EDGE != 0u && (eta > FGD_ETA_MAX || kappa > FGD_KAPPA_MAX)) {
+        // Beyond the domain (aluminium's κ reaches 9.2), FGD goes on from the value at its
+        // edge along the split sum's slope in F0 (src/tables/fgd.rs's `beyond_the_table`).
+        float slope = texture(split_sum, vec2(mu, sqrt(alpha))).r;
+        float edge = f0_channel(min(eta, FGD_ETA_MAX), min(kappa, FGD_KAPPA_MAX));
+        value += slope * (f0_channel(eta, kappa) - edge);
+    }
+    return value;
 }
 
 // Belcour et al. 2020 with the projection folded into the table: F(1)·P0 + P1 + F(ct1)·P2 +
@@ -53,9 +61,7 @@ float fgd_belcour_channel(float mu, float alpha, float eta, float kappa) {
         return texture(fgd_table, vec3(fgd_grid(mu), fgd_grid(alpha), fgd_grid(eta))).r;
     }
     vec4 p = texture(fgd_belcour, vec2(mu, sqrt(alpha)));
-    float k2 = kappa * kappa;
-    float f0 = ((eta - 1.0) * (eta - 1.0) + k2) / ((eta + 1.0) * (eta + 1.0) + k2);
-    return f0 * p.x + p.y + fresnel_conductor(BELCOUR_CT1, eta, kappa) * p.z
+    return f0_channel(eta, kappa) * p.x + p.y + fresnel_conductor(BELCOUR_CT1, eta, kappa) * p.z
         + fresnel_conductor(BELCOUR_CT2, eta, kappa) * p.w;
 }
 
@@ -69,9 +75,7 @@ float fgd_channel(float mu, float alpha, float eta, float kappa) {
     // Karis 2013 split sum: F0·A + B with F0 from the complex IOR (exact at normal incidence,
     // a Schlick-shaped approximation elsewhere, no total internal reflection).
     vec2 ab = texture(split_sum, vec2(mu, sqrt(alpha))).rg;
-    float k2 = kappa * kappa;
-    float f0 = ((eta - 1.0) * (eta - 1.0) + k2) / ((eta + 1.0) * (eta + 1.0) + k2);
-    return f0 * ab.x + ab.y;
+    return f0_channel(eta, kappa) * ab.x + ab.y;
 }
 
 // The albedo the models consume: within [0, 1] (src/model/mod.rs's `albedo`: half-float,

@@ -11,6 +11,12 @@ vec3 f0_complex(vec3 eta, vec3 kappa) {
     return ((eta - 1.0) * (eta - 1.0) + k2) / ((eta + 1.0) * (eta + 1.0) + k2);
 }
 
+// f0_complex of one channel.
+float f0_channel(float eta, float kappa) {
+    float k2 = kappa * kappa;
+    return ((eta - 1.0) * (eta - 1.0) + k2) / ((eta + 1.0) * (eta + 1.0) + k2);
+}
+
 // Exact unpolarised reflectance of a dielectric interface of relative IOR η at incidence
 // cosine c: 1 beyond the critical angle, and for η = 0 (nothing to transmit into).
 float fresnel_dielectric(float c, float eta) {

@@ -10,7 +10,12 @@
 layout(constant_id = 0) const uint MODEL = 0;
 layout(constant_id = 1) const uint MAX_LAYERS = 4;
 layout(constant_id = 2) const uint TIR_MODE = 0;
-layout(constant_id = 3) const uint FGD_MODE = 0;
+// The `fgd` axis in its low byte; bit 8, FGD_PAST_EDGE: the stack's lookups may fall past the
+// 4-D table's η, κ ≤ 4 (src/render/pass.rs's past_fgd_edge), and lib/fgd.glsl keeps the code
+// that carries FGD on from its edge; 0 folds it away.
+layout(constant_id = 3) const uint FGD_SPEC = 0;
+const uint FGD_MODE = FGD_SPEC & 0xFFu;
+const uint FGD_PAST_EDGE = (FGD_SPEC >> 8) & 1u;
 layout(constant_id = 4) const uint G2_MODE = 0;
 layout(constant_id = 5) const uint NDF_MODE = 0;
 // The work-group width of the compute entry points that shade (tm_eval, fgd_probe):
