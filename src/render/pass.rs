@@ -18,7 +18,7 @@ use crate::shader::specialize::{
 };
 
 use crate::variant::{
-    Mode, Model, ShadeSpec, Transport, VariantKey, FGD_PAST_EDGE_SHIFT, LAMP_VALUES,
+    Fgd, Mode, Model, ShadeSpec, Transport, VariantKey, FGD_PAST_EDGE_SHIFT, LAMP_VALUES,
 };
 
 use super::classes::{Class, Routing};
@@ -123,7 +123,7 @@ impl PassKey {
                     diffuse: ends_diffuse(layers),
                     transmits: ends_transmissive(layers),
                     lights: !lighting.lights.is_empty(),
-                    fgd_past_edge: past_fgd_edge(layers, Some(surface)),
+                    fgd_past_edge: reads_past_fgd_edge(variant, layers, Some(surface)),
                     lamps: [0.0; LAMP_VALUES],
                 });
             }
@@ -147,7 +147,7 @@ impl PassKey {
             diffuse: ends_diffuse(layers),
             transmits: ends_transmissive(layers),
             lights: !lighting.lights.is_empty(),
-            fgd_past_edge: past_fgd_edge(layers, surface),
+            fgd_past_edge: reads_past_fgd_edge(variant, layers, surface),
             lamps: [0.0; LAMP_VALUES],
         })
     }
@@ -174,7 +174,7 @@ impl PassKey {
             diffuse: ends_diffuse(layers),
             transmits: ends_transmissive(layers),
             lights: !lighting.lights.is_empty(),
-            fgd_past_edge: past_fgd_edge(layers, None),
+            fgd_past_edge: false,
             lamps: [0.0; LAMP_VALUES],
         }
     }
@@ -195,7 +195,7 @@ impl PassKey {
             diffuse: ends_diffuse(layers),
             transmits: ends_transmissive(layers),
             lights: !lighting.lights.is_empty(),
-            fgd_past_edge: past_fgd_edge(layers, surface),
+            fgd_past_edge: reads_past_fgd_edge(variant, layers, surface),
             lamps: [0.0; LAMP_VALUES],
         }
     }
@@ -299,7 +299,7 @@ impl PassKey {
                 base(diffuse, transmits)
             )));
         }
-        if past_fgd_edge(layers, None) && !self.fgd_past_edge {
+        if reads_past_fgd_edge(self.variant, layers, None) && !self.fgd_past_edge {
             return Err(Error::Unsupported(format!(
                 "this pass ({}) was built for a stack whose FGD lookups stay within the 4-D \
                  table's η, κ ≤ {}, and this one reaches past it; prepare a pass for this stack",
@@ -423,6 +423,17 @@ pub fn past_fgd_edge(layers: &[LayerParams], surface: Option<&Surface>) -> bool 
     false
 }
 
+/// Whether a pass of `variant` must hold the code past the 4-D FGD tables' edge for `layers`:
+/// it reads one of them (`fgd=4d`, `resampled4d`) and the stack reaches past it
+/// ([`past_fgd_edge`]).
+fn reads_past_fgd_edge(
+    variant: VariantKey,
+    layers: &[LayerParams],
+    surface: Option<&Surface>,
+) -> bool {
+    matches!(variant.fgd, Fgd::Full4d | Fgd::Resampled4d) && past_fgd_edge(layers, surface)
+}
+
 /// Whether `pass` was prepared for `key`: the same key but for the lamps, which the renderer
 /// sets.
 fn requested(pass: &ForwardPass, key: &PassKey) -> bool {
@@ -490,8 +501,12 @@ mod tests {
         ));
         assert!(!past_fgd_edge(&[two], None));
         // A pass built without the code refuses a stack that needs it, by name.
-        let variant: VariantKey = "model=tm2".parse().unwrap();
+        let variant: VariantKey = "model=tm2,fgd=4d".parse().unwrap();
         let lighting = Lighting::default();
+        // Only the 4-D tables read past their edge.
+        let karis: VariantKey = "model=tm2".parse().unwrap();
+        let plain = PassKey::uniform(karis, &preset("gold"), &lighting).unwrap();
+        assert!(plain.admits(&preset("aluminium")).is_ok());
         let gold = PassKey::uniform(variant, &preset("gold"), &lighting).unwrap();
         assert!(!gold.fgd_past_edge);
         let error = gold.admits(&preset("aluminium")).unwrap_err().to_string();

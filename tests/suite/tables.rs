@@ -171,13 +171,16 @@ fn every_tir_and_fgd_value_renders_every_preset_finite(model: &str) {
             .parse()
             .unwrap();
         // One pass for the stacks that end in a diffuse base, one for those that transmit, one
-        // for the others (`ShadeSpec::diffuse_base`, `ShadeSpec::transmits`).
+        // for the others (`ShadeSpec::diffuse_base`, `ShadeSpec::transmits`), and one for a
+        // stack past the 4-D FGD tables' κ (`PassKey::fgd_past_edge`).
         let ceramic = Stack::resolve("glazed-ceramic").unwrap().params();
         let glass = Stack::resolve("amber-glass").unwrap().params();
+        let aluminium = Stack::resolve("aluminium").unwrap().params();
         let passes = [
             renderer.prepare_uniform(variant, &[]).unwrap(),
             renderer.prepare_uniform(variant, &ceramic).unwrap(),
             renderer.prepare_uniform(variant, &glass).unwrap(),
+            renderer.prepare_uniform(variant, &aluminium).unwrap(),
         ];
         for stack in &stacks {
             let layers = stack.params();
