@@ -348,7 +348,15 @@ fn a_disk_light_spreads_the_highlight_and_keeps_its_energy() {
     let sharp = at_peak(0.0);
     let radius = 20_f64.to_radians();
     let wide = at_peak(radius);
-    assert!(wide < 0.5 * sharp, "peak {sharp} → {wide} under a 20° disk");
+    // The disk-averaged GGX peak falls to α² / (α² + w²), w = tan(θ_r/2) (model::light): 0.56
+    // for gold's α = 0.2 under a 20° disk. G2 at the widened α moves it by a little.
+    let (alpha, w) = (layers[0].roughness, (0.5 * radius).tan());
+    let fall = alpha * alpha / (alpha * alpha + w * w);
+    assert!(
+        (wide / sharp / fall - 1.0).abs() < 0.05,
+        "peak {sharp} → {wide} under a 20° disk, {} of it where the disk's mean is {fall}",
+        wide / sharp
+    );
     for f in furnace(&evaluator, &layers, mu, radius) {
         for c in 0..3 {
             assert!(

@@ -21,9 +21,11 @@ const float LIGHT_ALPHA_FLOOR = LIGHT_MIN_ALPHA;
 
 // The roughness a lobe of roughness α is shaded with under a light whose disk widens it by
 // `widening`, tan(θ_r/2) of its angular radius θ_r: floored (a punctual light's highlight on
-// a mirror is a delta), then widened (model::light::shading_alpha).
+// a mirror is a delta), then widened in quadrature, α'² = α² + tan²(θ_r/2), the GGX lobe
+// whose peak is that of the lobe averaged over the disk (model::light::shading_alpha).
 float light_alpha_widened(float alpha, float widening) {
-    return min(max(alpha, LIGHT_ALPHA_FLOOR) + widening, 1.0);
+    float a = max(alpha, LIGHT_ALPHA_FLOOR);
+    return min(sqrt(a * a + widening * widening), 1.0);
 }
 
 // light_alpha_widened under a light of angular radius θ_r (radians).
