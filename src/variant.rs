@@ -242,7 +242,8 @@ axis!(
         /// The environment's lamps taken out of the map (`tables::lamps`: its small regions
         /// far brighter than its mean) and lit as disk lights, each lobe evaluated at each
         /// lamp as an analytic light is (the pass holds them as constants); the rest read as
-        /// the split sum reads the map, from Karis's cube of the map without them.
+        /// the split sum reads the map, from a cube of the map without them prefiltered with the
+        /// lobe's own weights (as the matched cube is) at Karis's levels.
         Lamps = "lamps",
     }
 );

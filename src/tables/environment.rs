@@ -13,9 +13,11 @@
 //!    D's pdf), reads the source mip of its solid angle, and takes [`MATCHED_SAMPLES`] times
 //!    the samples. Its levels are spaced in log α ([`matched_alpha_of_mip`]).
 //! 4. The lamps' cube (`ibl=lamps`) is built the first time a pass needs it: the map without
-//!    its lamps ([`crate::tables::lamps`]) converted to a source cube of its own and
-//!    prefiltered as Karis's, its mips 0 and 1 the whole map's (a sharp lobe reads each lamp's
-//!    own shape there).
+//!    its lamps ([`crate::tables::lamps`]) converted to a source cube of its own, its mips 0
+//!    and 1 the whole map's (a sharp lobe reads each lamp's own shape there). It is
+//!    prefiltered as the matched cube is, at the levels of Karis's, so that `ibl=lamps` reads
+//!    it with the split sum's fetch: Karis's blurrier source mips spread a lamp over the dark
+//!    around it, which a near-mirror lobe reading mip 1 saw (profiling/README.md).
 
 use std::f64::consts::PI;
 
@@ -106,6 +108,43 @@ pub enum Weighting {
     Matched,
 }
 
+/// Where a prefiltered cube's levels are: the α each mip m ≥ 1 is filtered at.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Levels {
+    /// α = (m / (M − 1))², Karis's (`lib/ibl.glsl`'s `ibl_mip_of_alpha`).
+    Karis,
+    /// [`matched_alpha_of_mip`], evenly spaced in log α (`ibl_matched_mip_of_alpha`).
+    LogAlpha,
+}
+
+/// How one of the environment's cubes is prefiltered, and its name.
+struct Prefilter {
+    name: &'static str,
+    weighting: Weighting,
+    levels: Levels,
+}
+
+/// The split sum's cube (Karis 2013).
+const KARIS_CUBE: Prefilter = Prefilter {
+    name: "environment prefiltered cube",
+    weighting: Weighting::Karis,
+    levels: Levels::Karis,
+};
+
+/// The matched cube (`ibl=matched`, `taps`, `anisotropic`).
+const MATCHED_CUBE: Prefilter = Prefilter {
+    name: "environment matched cube",
+    weighting: Weighting::Matched,
+    levels: Levels::LogAlpha,
+};
+
+/// The lamps' cube (`ibl=lamps`): the matched cube's weights at Karis's levels.
+const LAMPS_CUBE: Prefilter = Prefilter {
+    name: "environment lamps cube",
+    weighting: Weighting::Matched,
+    levels: Levels::Karis,
+};
+
 /// The matched cube's samples per texel, as a multiple of [`EnvDesc::samples`].
 pub const MATCHED_SAMPLES: u32 = 4;
 
@@ -166,7 +205,7 @@ impl Environment {
             gpu,
             CubeSources::whole(&source, &source_view, &cube_sampler),
             desc,
-            Weighting::Karis,
+            &KARIS_CUBE,
         )?;
         let lamps = lamps::extract(equirect);
         Ok(Self {
@@ -197,7 +236,7 @@ impl Environment {
                 gpu,
                 CubeSources::whole(&self.source, &self.source_view, &self.cube_sampler),
                 self.desc,
-                Weighting::Matched,
+                &MATCHED_CUBE,
             )?);
         }
         Ok(())
@@ -213,9 +252,9 @@ impl Environment {
         &self.lamps.lamps
     }
 
-    /// Builds the lamps' cube (`ibl=lamps`) unless built: prefiltered as Karis's, its mips 0
-    /// and 1 from the whole map, the others from the map without its lamps (converted to a
-    /// cube of its own). A lobe sharp enough to read mips 0–1 sees each lamp's own shape there;
+    /// Builds the lamps' cube (`ibl=lamps`) unless built: prefiltered with the matched cube's
+    /// weights at Karis's levels, its mips 0 and 1 from the whole map, the others from the map
+    /// without its lamps (converted to a cube of its own). A lobe sharp enough to read mips 0–1 sees each lamp's own shape there;
     /// from mip 2 the lamps come from the analytic disks alone (shade.glsl's lobe_lamps).
     pub fn build_lamps(&mut self, gpu: &Gpu) -> Result<()> {
         if self.lamps_cube.is_none() {
@@ -225,7 +264,7 @@ impl Environment {
                 rest: &residual_view,
                 ..CubeSources::whole(&self.source, &self.source_view, &self.cube_sampler)
             };
-            self.lamps_cube = Some(prefiltered_cube(gpu, sources, self.desc, Weighting::Karis)?);
+            self.lamps_cube = Some(prefiltered_cube(gpu, sources, self.desc, &LAMPS_CUBE)?);
         }
         Ok(())
     }
@@ -326,22 +365,18 @@ impl<'a> CubeSources<'a> {
     }
 }
 
-/// A prefiltered cube of `desc.mip_count` mips from `sources`, its samples weighed by
-/// `weighting`: mip 0 a copy of the whole map's source, mips ≥ 1 the GGX prefilter of the
-/// source [`CubeSources`] names for each. Left in `FragmentRead`, the sources back in
-/// `ComputeRead`.
+/// A prefiltered cube of `desc.mip_count` mips from `sources`, filtered as `filter` says: mip
+/// 0 a copy of the whole map's source, mips ≥ 1 the GGX prefilter of the source
+/// [`CubeSources`] names for each. Left in `FragmentRead`, the sources back in `ComputeRead`.
 fn prefiltered_cube(
     gpu: &Gpu,
     sources: CubeSources,
     desc: EnvDesc,
-    weighting: Weighting,
+    filter: &Prefilter,
 ) -> Result<(Image, ImageView)> {
     let (mirror, whole_view) = sources.whole;
     let device = &gpu.device;
-    let name = match weighting {
-        Weighting::Karis => "environment prefiltered cube",
-        Weighting::Matched => "environment matched cube",
-    };
+    let name = filter.name;
     let image = ImageDesc::new_cube(Format::R16G16B16A16_SFLOAT, desc.face_size)
         .mips(desc.mip_count)
         .usage(cube_usage());
@@ -382,7 +417,7 @@ fn prefiltered_cube(
             ImageState::TransferSrc,
             ImageState::ComputeRead,
         );
-        record_prefilter(rec, &prefilter, &targets, &cube, desc, weighting);
+        record_prefilter(rec, &prefilter, &targets, &cube, desc, filter);
         rec.end_label();
         Ok(())
     })?;
@@ -459,7 +494,7 @@ fn record_prefilter(
     targets: &[(u32, ImageView, DescriptorSet)],
     cube: &Image,
     desc: EnvDesc,
-    weighting: Weighting,
+    filter: &Prefilter,
 ) {
     let mips = 1..desc.mip_count;
     rec.transition(
@@ -470,9 +505,9 @@ fn record_prefilter(
     );
     for (mip, _, set) in targets {
         let (w, _, _) = cube.desc.mip_extent(*mip);
-        let alpha = match weighting {
-            Weighting::Karis => (*mip as f64 / (desc.mip_count - 1) as f64).powi(2),
-            Weighting::Matched => matched_alpha_of_mip(*mip, desc.mip_count),
+        let alpha = match filter.levels {
+            Levels::Karis => (*mip as f64 / (desc.mip_count - 1) as f64).powi(2),
+            Levels::LogAlpha => matched_alpha_of_mip(*mip, desc.mip_count),
         };
         prefilter.record_dispatch(
             rec,
@@ -481,11 +516,11 @@ fn record_prefilter(
                 alpha: alpha as f32,
                 source_size: desc.face_size,
                 destination_size: w,
-                sample_count: match weighting {
+                sample_count: match filter.weighting {
                     Weighting::Karis => desc.samples,
                     Weighting::Matched => MATCHED_SAMPLES * desc.samples,
                 },
-                matched: u32::from(weighting == Weighting::Matched),
+                matched: u32::from(filter.weighting == Weighting::Matched),
             },
             [w, w, 6],
         );

@@ -30,8 +30,9 @@ vec3 shade_behind(vec3 n, vec3 d) {
 // One fetch of the environment for a lobe of roughness α around `r` (`behind`: mirrored):
 // `ibl=split-sum`, Karis's cube along Lagarde's dominant direction at the lobe's own mip;
 // `ibl=matched`, the matched cube where its kernel comes closest to the lobe in L²
-// (lib/ibl.glsl's ibl_lobe_fit); `ibl=lamps` as the split sum, from Karis's cube of the map
-// without its lamps from mip 2 (tables::lamps), which the `matched` binding then holds
+// (lib/ibl.glsl's ibl_lobe_fit); `ibl=lamps` as the split sum, from the lamps' cube (the lobe's
+// own weights at Karis's levels) of the map without its lamps from mip 2 (tables::lamps,
+// tables::environment), which the `matched` binding then holds
 // (lobe_lamps adds them); the others, the matched cube along the lobe's mean direction at the
 // mip of its spread (ibl_lobe_moments), `ibl=anisotropic` in two fetches that match its second
 // moments too. A mirror lobe reads mip 0, the whole map, along `r` either way.
