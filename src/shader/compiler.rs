@@ -263,7 +263,8 @@ fn codes_glsl() -> String {
 }
 
 /// The constant arrays of `codes.glsl`: `tir=fit`'s coefficients (model::tir_fit, written by
-/// `lamina tables tir-fit`) and the Gauss–Legendre rule of the hemispherical Fresnel averages
+/// `lamina tables tir-fit`), `ibl=lamps`' polynomial placement of its fetch
+/// (tables::lobe_fit::polynomial) and the Gauss–Legendre rule of the hemispherical Fresnel averages
 /// (model::diffuse), over s = √μ on [0, 1].
 fn arrays_glsl() -> String {
     let fit = crate::model::tir_fit::COEFFICIENTS;
@@ -274,6 +275,15 @@ fn arrays_glsl() -> String {
         fit.len(),
         fit.map(|c| format!("{c:e}")).join(", ")
     ));
+    for (name, coefficients) in [
+        ("IBL_LAMPS_LEAN", crate::tables::lobe_fit::LEAN_COEFFICIENTS),
+        ("IBL_LAMPS_ROOT", crate::tables::lobe_fit::ROOT_COEFFICIENTS),
+    ] {
+        out.push_str(&format!(
+            "const float {name}[6] = float[6]({});\n",
+            coefficients.map(|c| format!("{c:e}")).join(", ")
+        ));
+    }
     let rule = crate::model::diffuse::gauss_legendre_unit(crate::model::diffuse::HEMISPHERE_POINTS);
     let list = |f: &dyn Fn(&(f64, f64)) -> f64| {
         rule.iter()

@@ -20,6 +20,11 @@
 //! warped towards the tail as in `lobe_moments`), with p in closed form, so a kernel
 //! sharper than the grid stays well posed. The search: a coarse grid over (lean, √α′), then
 //! [`REFINEMENTS`] refinements around the best point.
+//!
+//! `ibl=lamps` places its one fetch of the rest of the map with [`polynomial`], two small
+//! polynomials in (√μ, √α) least-squares fitted to this fit on the grid [`POLYNOMIAL_GRID`]
+//! (the test `the_polynomial_is_the_least_squares_fit_on_its_grid` refits them and prints
+//! the refit): a dozen arithmetic operations where the table's lookup is a texture fetch.
 
 use glam::DVec3;
 
@@ -117,6 +122,53 @@ fn albedo(v: DVec3, alpha: f64) -> f64 {
     sum / total
 }
 
+/// The grid the polynomial is fitted on: √μ and √α each at `n` points uniform on `[lo, hi]`,
+/// where `ibl=lamps` reads its mip from it (above α ≈ 0.08, its mip 2: below, the split sum's
+/// mip of α is at most 2 and the fetch never reads sharper than that) and the lean changes the
+/// fetch (away from the normal view).
+pub const POLYNOMIAL_GRID: [(f64, f64, u32); 2] = [(0.1, 0.9, 9), (0.25, 0.85, 9)];
+
+/// The lean w = α · (c₀ + c₁√α + c₂√μ + c₃√μ√α + c₄μ + c₅α), which vanishes with α as a
+/// mirror lobe's does.
+pub const LEAN_COEFFICIENTS: [f64; 6] = [
+    2.1582694947999697,
+    -2.9077468927884005,
+    -2.729581233028867,
+    3.054545820467833,
+    -0.09492116652361282,
+    2.0841218392983007,
+];
+
+/// √α′ = √α · (c₀ + c₁√α + c₂√μ + c₃√μ√α + c₄μ + c₅μ√α), c₀ + c₂ + c₄ ≈ 1 at a normal view.
+pub const ROOT_COEFFICIENTS: [f64; 6] = [
+    0.3628165938178354,
+    0.9318763117408332,
+    -0.2504194411432038,
+    -0.21272428241138913,
+    0.9743564066807135,
+    -0.8888523152061817,
+];
+
+/// The terms of the lean's and √α′'s polynomials at (√μ, √α), before the factor α or √α.
+fn polynomial_terms(s: f64, r: f64) -> ([f64; 6], [f64; 6]) {
+    (
+        [1.0, r, s, s * r, s * s, r * r],
+        [1.0, r, s, s * r, s * s, s * s * r],
+    )
+}
+
+/// The polynomial twin of [`fit`] that `ibl=lamps` evaluates (lib/ibl.glsl's
+/// ibl_lobe_fit_polynomial): the lean w and √α′, each clamped to [0, 1].
+pub fn polynomial(mu: f64, alpha: f64) -> (f64, f64) {
+    let (s, r) = (mu.clamp(0.0, 1.0).sqrt(), alpha.clamp(0.0, 1.0).sqrt());
+    let (lean, root) = polynomial_terms(s, r);
+    let dot = |c: &[f64; 6], t: &[f64; 6]| c.iter().zip(t).map(|(c, t)| c * t).sum::<f64>();
+    (
+        (r * r * dot(&LEAN_COEFFICIENTS, &lean)).clamp(0.0, 1.0),
+        (r * dot(&ROOT_COEFFICIENTS, &root)).clamp(0.0, 1.0),
+    )
+}
+
 /// The fetch closest in L² to the lobe of roughness `alpha` at view cosine `mu`: the weight w
 /// of normalize(mix(R, N, w)) and √α′.
 pub fn fit(mu: f64, alpha: f64, kernels: &Kernels) -> (f64, f64) {
@@ -191,6 +243,86 @@ pub fn fit(mu: f64, alpha: f64, kernels: &Kernels) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Least squares of `y ≈ Σ c_k x_k` by the normal equations (Gaussian elimination with
+    /// partial pivoting; six unknowns).
+    fn least_squares(rows: &[([f64; 6], f64)]) -> [f64; 6] {
+        let mut a = [[0.0f64; 7]; 6];
+        for (x, y) in rows {
+            for i in 0..6 {
+                for j in 0..6 {
+                    a[i][j] += x[i] * x[j];
+                }
+                a[i][6] += x[i] * y;
+            }
+        }
+        for col in 0..6 {
+            let pivot = (col..6)
+                .max_by(|&p, &q| a[p][col].abs().total_cmp(&a[q][col].abs()))
+                .unwrap();
+            a.swap(col, pivot);
+            let pivot_row = a[col];
+            for (r, row) in a.iter_mut().enumerate() {
+                if r != col {
+                    let f = row[col] / pivot_row[col];
+                    for (x, p) in row.iter_mut().zip(pivot_row).skip(col) {
+                        *x -= f * p;
+                    }
+                }
+            }
+        }
+        std::array::from_fn(|i| a[i][6] / a[i][i])
+    }
+
+    #[test]
+    fn the_polynomial_is_the_least_squares_fit_on_its_grid() {
+        let kernels = Kernels::default();
+        let [(s_lo, s_hi, s_n), (r_lo, r_hi, r_n)] = POLYNOMIAL_GRID;
+        let at =
+            |lo: f64, hi: f64, n: u32, k: u32| lo + (hi - lo) * f64::from(k) / f64::from(n - 1);
+        let mut points = Vec::new();
+        for i in 0..s_n {
+            for j in 0..r_n {
+                let (s, r) = (at(s_lo, s_hi, s_n, i), at(r_lo, r_hi, r_n, j));
+                points.push((s, r, fit(s * s, r * r, &kernels)));
+            }
+        }
+        let rows = |root: bool| -> Vec<([f64; 6], f64)> {
+            points
+                .iter()
+                .map(|&(s, r, (w, root_alpha))| {
+                    let (lean, spread) = polynomial_terms(s, r);
+                    if root {
+                        (spread.map(|t| t * r), root_alpha)
+                    } else {
+                        (lean.map(|t| t * r * r), w)
+                    }
+                })
+                .collect()
+        };
+        let (lean, root) = (least_squares(&rows(false)), least_squares(&rows(true)));
+        println!("lean {lean:?}\nroot {root:?}");
+        for (committed, refit) in [(LEAN_COEFFICIENTS, lean), (ROOT_COEFFICIENTS, root)] {
+            for (c, f) in committed.iter().zip(refit) {
+                assert!(
+                    (c - f).abs() < 1e-6,
+                    "committed {committed:?}, refit {refit:?}"
+                );
+            }
+        }
+        // How close the polynomial comes to the fit it stands for: the lean within 0.05, and
+        // √α′ within one of the lamps' cube's levels at eight mips (1/7 in √α: the fit's own
+        // search steps through √α′ of 0.6, 0.7, 0.95 and 1 on the roughest lobes).
+        let (mut lean_error, mut root_error) = (0.0f64, 0.0f64);
+        for &(s, r, (w, root_alpha)) in &points {
+            let (pw, proot) = polynomial(s * s, r * r);
+            lean_error = lean_error.max((pw - w).abs());
+            root_error = root_error.max((proot - root_alpha).abs());
+        }
+        println!("largest error: lean {lean_error:.4}, √α′ {root_error:.4}");
+        assert!(lean_error < 0.05, "lean {lean_error}");
+        assert!(root_error < 1.0 / 7.0, "√α′ {root_error}");
+    }
 
     #[test]
     fn a_normal_view_is_fitted_by_the_cubes_own_lobe() {

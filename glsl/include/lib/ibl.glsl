@@ -81,6 +81,21 @@ vec2 ibl_lobe_fit(sampler2D table, float n_dot_v, float alpha) {
     return textureLod(table, ibl_lobe_moments_at(n_dot_v, alpha) + vec2(0.5, 0.0), 0.0).yz;
 }
 
+// `ibl=lamps`' placement of its fetch: tables::lobe_fit::polynomial, the lean w of
+// normalize(mix(R, N, w)) and √α′ of the fetch that come closest to the lobe in L²
+// (ibl_lobe_fit's table) as two polynomials in (√μ, √α), a dozen operations where the table
+// is a texture fetch.
+vec2 ibl_lobe_fit_polynomial(float n_dot_v, float alpha) {
+    float s = sqrt(clamp(n_dot_v, 0.0, 1.0));
+    float r = sqrt(clamp(alpha, 0.0, 1.0));
+    float w = IBL_LAMPS_LEAN[0] + r * (IBL_LAMPS_LEAN[1] + r * IBL_LAMPS_LEAN[5])
+        + s * (IBL_LAMPS_LEAN[2] + r * IBL_LAMPS_LEAN[3] + s * IBL_LAMPS_LEAN[4]);
+    float root = IBL_LAMPS_ROOT[0] + r * IBL_LAMPS_ROOT[1]
+        + s * (IBL_LAMPS_ROOT[2] + r * IBL_LAMPS_ROOT[3]
+               + s * (IBL_LAMPS_ROOT[4] + r * IBL_LAMPS_ROOT[5]));
+    return clamp(vec2(r * r * w, r * root), 0.0, 1.0);
+}
+
 // The irradiance E(n) of an environment given by its order-2 spherical-harmonic coefficients,
 // each already times its band's cosine-lobe factor Â_l (π, 2π/3, π/4): Ramamoorthi & Hanrahan,
 // "An Efficient Representation for Irradiance Environment Maps" (2001). The coefficients come
