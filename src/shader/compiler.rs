@@ -276,8 +276,8 @@ fn arrays_glsl() -> String {
         fit.map(|c| format!("{c:e}")).join(", ")
     ));
     for (name, coefficients) in [
-        ("IBL_LAMPS_LEAN", crate::tables::lobe_fit::LEAN_COEFFICIENTS),
-        ("IBL_LAMPS_ROOT", crate::tables::lobe_fit::ROOT_COEFFICIENTS),
+        ("IBL_LAMPS_LEAN", super::interface::LAMPS_LEAN_COEFFICIENTS),
+        ("IBL_LAMPS_ROOT", super::interface::LAMPS_ROOT_COEFFICIENTS),
     ] {
         out.push_str(&format!(
             "const float {name}[6] = float[6]({});\n",

@@ -187,6 +187,30 @@ pub const LOBE_ALBEDO_SIZE: u32 = 64;
 /// `glsl/include/lib/ibl.glsl`). The host builds it at this size (`tables::lobe_moments`).
 pub const LOBE_MOMENTS_SIZE: u32 = 32;
 
+/// `ibl=lamps`' placement of its fetch (`IBL_LAMPS_LEAN` and `IBL_LAMPS_ROOT` in
+/// generated/codes.glsl; `tables::lobe_fit::polynomial`, whose test refits them): the lean
+/// w = α · (c₀ + c₁√α + c₂√μ + c₃√μ√α + c₄μ + c₅α), which vanishes with α as a
+/// mirror lobe's does.
+pub const LAMPS_LEAN_COEFFICIENTS: [f64; 6] = [
+    2.1582694947999697,
+    -2.9077468927884005,
+    -2.729581233028867,
+    3.054545820467833,
+    -0.09492116652361282,
+    2.0841218392983007,
+];
+
+/// `ibl=lamps`' √α′ = √α · (c₀ + c₁√α + c₂√μ + c₃√μ√α + c₄μ + c₅μ√α), c₀ + c₂ + c₄ ≈ 1 at a
+/// normal view.
+pub const LAMPS_ROOT_COEFFICIENTS: [f64; 6] = [
+    0.3628165938178354,
+    0.9318763117408332,
+    -0.2504194411432038,
+    -0.21272428241138913,
+    0.9743564066807135,
+    -0.8888523152061817,
+];
+
 /// The 4-D FGD table's domain in η and κ: [0, 4] each (ALGORITHMS.md §6.1); beyond it, the
 /// value at its edge carried on (`tables::fgd::beyond_the_table`). `FGD_ETA_MAX` and `FGD_KAPPA_MAX` in `glsl/include/lib/fgd.glsl`.
 pub const FGD_ETA_MAX: f64 = 4.0;

@@ -29,6 +29,7 @@
 use glam::DVec3;
 
 use crate::model::microfacet::{ggx_d, reflect, sample_vndf, smith_lambda};
+use crate::shader::interface::{LAMPS_LEAN_COEFFICIENTS, LAMPS_ROOT_COEFFICIENTS};
 
 /// Points of the kernel's 1-D quadrature of ∫K².
 const KERNEL_POINTS: u32 = 2048;
@@ -128,27 +129,6 @@ fn albedo(v: DVec3, alpha: f64) -> f64 {
 /// fetch (away from the normal view).
 pub const POLYNOMIAL_GRID: [(f64, f64, u32); 2] = [(0.1, 0.9, 9), (0.25, 0.85, 9)];
 
-/// The lean w = α · (c₀ + c₁√α + c₂√μ + c₃√μ√α + c₄μ + c₅α), which vanishes with α as a
-/// mirror lobe's does.
-pub const LEAN_COEFFICIENTS: [f64; 6] = [
-    2.1582694947999697,
-    -2.9077468927884005,
-    -2.729581233028867,
-    3.054545820467833,
-    -0.09492116652361282,
-    2.0841218392983007,
-];
-
-/// √α′ = √α · (c₀ + c₁√α + c₂√μ + c₃√μ√α + c₄μ + c₅μ√α), c₀ + c₂ + c₄ ≈ 1 at a normal view.
-pub const ROOT_COEFFICIENTS: [f64; 6] = [
-    0.3628165938178354,
-    0.9318763117408332,
-    -0.2504194411432038,
-    -0.21272428241138913,
-    0.9743564066807135,
-    -0.8888523152061817,
-];
-
 /// The terms of the lean's and √α′'s polynomials at (√μ, √α), before the factor α or √α.
 fn polynomial_terms(s: f64, r: f64) -> ([f64; 6], [f64; 6]) {
     (
@@ -164,8 +144,8 @@ pub fn polynomial(mu: f64, alpha: f64) -> (f64, f64) {
     let (lean, root) = polynomial_terms(s, r);
     let dot = |c: &[f64; 6], t: &[f64; 6]| c.iter().zip(t).map(|(c, t)| c * t).sum::<f64>();
     (
-        (r * r * dot(&LEAN_COEFFICIENTS, &lean)).clamp(0.0, 1.0),
-        (r * dot(&ROOT_COEFFICIENTS, &root)).clamp(0.0, 1.0),
+        (r * r * dot(&LAMPS_LEAN_COEFFICIENTS, &lean)).clamp(0.0, 1.0),
+        (r * dot(&LAMPS_ROOT_COEFFICIENTS, &root)).clamp(0.0, 1.0),
     )
 }
 
@@ -302,7 +282,10 @@ mod tests {
         };
         let (lean, root) = (least_squares(&rows(false)), least_squares(&rows(true)));
         println!("lean {lean:?}\nroot {root:?}");
-        for (committed, refit) in [(LEAN_COEFFICIENTS, lean), (ROOT_COEFFICIENTS, root)] {
+        for (committed, refit) in [
+            (LAMPS_LEAN_COEFFICIENTS, lean),
+            (LAMPS_ROOT_COEFFICIENTS, root),
+        ] {
             for (c, f) in committed.iter().zip(refit) {
                 assert!(
                     (c - f).abs() < 1e-6,
