@@ -264,24 +264,21 @@ fn codes_glsl() -> String {
 
 /// The constant arrays of `codes.glsl`: `tir=fit`'s coefficients (model::tir_fit, written by
 /// `lamina tables tir-fit`), `ibl=lamps`' polynomial placement of its fetch
-/// (tables::lobe_fit::polynomial) and the Gauss–Legendre rule of the hemispherical Fresnel averages
-/// (model::diffuse), over s = √μ on [0, 1].
+/// (tables::lobe_fit::polynomial) and the Gauss–Legendre rule of the hemispherical Fresnel
+/// averages (model::diffuse), over s = √μ on [0, 1].
 fn arrays_glsl() -> String {
-    let fit = crate::model::tir_fit::COEFFICIENTS;
     let mut out = String::new();
-    out.push_str(&format!(
-        "const float TIR_FIT_COEFFICIENTS[{}] = float[{}]({});\n",
-        fit.len(),
-        fit.len(),
-        fit.map(|c| format!("{c:e}")).join(", ")
-    ));
-    for (name, coefficients) in [
-        ("IBL_LAMPS_LEAN", super::interface::LAMPS_LEAN_COEFFICIENTS),
-        ("IBL_LAMPS_ROOT", super::interface::LAMPS_ROOT_COEFFICIENTS),
-    ] {
+    let arrays: [(&str, &[f64]); 3] = [
+        ("TIR_FIT_COEFFICIENTS", &crate::model::tir_fit::COEFFICIENTS),
+        ("IBL_LAMPS_LEAN", &super::interface::LAMPS_LEAN_COEFFICIENTS),
+        ("IBL_LAMPS_ROOT", &super::interface::LAMPS_ROOT_COEFFICIENTS),
+    ];
+    for (name, values) in arrays {
+        let n = values.len();
+        let list: Vec<String> = values.iter().map(|c| format!("{c:e}")).collect();
         out.push_str(&format!(
-            "const float {name}[6] = float[6]({});\n",
-            coefficients.map(|c| format!("{c:e}")).join(", ")
+            "const float {name}[{n}] = float[{n}]({});\n",
+            list.join(", ")
         ));
     }
     let rule = crate::model::diffuse::gauss_legendre_unit(crate::model::diffuse::HEMISPHERE_POINTS);

@@ -37,7 +37,8 @@ vec3 shade_behind(vec3 n, vec3 d) {
 // of the map without its lamps from mip 2 (tables::lamps, tables::environment), which the
 // `matched` binding then holds (lobe_lamps adds them); the others, the matched cube along
 // the lobe's mean direction at the mip of its spread (ibl_lobe_moments), `ibl=anisotropic` in
-// two fetches that match its second moments too. A mirror lobe reads mip 0, the whole map, along `r` either way.
+// two fetches that match its second moments too. A mirror lobe reads mip 0, the whole map,
+// along `r` either way.
 vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
     vec3 dir;
     float mip;
