@@ -224,34 +224,18 @@ pub fn fit(mu: f64, alpha: f64, kernels: &Kernels) -> (f64, f64) {
 mod tests {
     use super::*;
 
-    /// Least squares of `y ≈ Σ c_k x_k` by the normal equations (Gaussian elimination with
-    /// partial pivoting; six unknowns).
+    /// Least squares of `y ≈ Σ c_k x_k` by the normal equations, solved as the TIR fit's are.
     fn least_squares(rows: &[([f64; 6], f64)]) -> [f64; 6] {
-        let mut a = [[0.0f64; 7]; 6];
+        let (mut a, mut b) = ([[0.0f64; 6]; 6], [0.0f64; 6]);
         for (x, y) in rows {
             for i in 0..6 {
                 for j in 0..6 {
                     a[i][j] += x[i] * x[j];
                 }
-                a[i][6] += x[i] * y;
+                b[i] += x[i] * y;
             }
         }
-        for col in 0..6 {
-            let pivot = (col..6)
-                .max_by(|&p, &q| a[p][col].abs().total_cmp(&a[q][col].abs()))
-                .unwrap();
-            a.swap(col, pivot);
-            let pivot_row = a[col];
-            for (r, row) in a.iter_mut().enumerate() {
-                if r != col {
-                    let f = row[col] / pivot_row[col];
-                    for (x, p) in row.iter_mut().zip(pivot_row).skip(col) {
-                        *x -= f * p;
-                    }
-                }
-            }
-        }
-        std::array::from_fn(|i| a[i][6] / a[i][i])
+        super::super::tir_fit::solve(a, b).expect("the grid's normal equations are regular")
     }
 
     #[test]

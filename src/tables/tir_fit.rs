@@ -179,7 +179,7 @@ fn levenberg_marquardt<const N: usize>(
 
 /// Solves `a x = b` by Gaussian elimination with partial pivoting; `None` when `a` is
 /// singular.
-fn solve<const N: usize>(mut a: [[f64; N]; N], mut b: [f64; N]) -> Option<[f64; N]> {
+pub(super) fn solve<const N: usize>(mut a: [[f64; N]; N], mut b: [f64; N]) -> Option<[f64; N]> {
     for col in 0..N {
         let pivot = (col..N).max_by(|&p, &q| a[p][col].abs().total_cmp(&a[q][col].abs()))?;
         if a[pivot][col].abs() < 1e-300 {
