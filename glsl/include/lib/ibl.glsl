@@ -83,16 +83,22 @@ vec2 ibl_lobe_fit(sampler2D table, float n_dot_v, float alpha) {
 
 // `ibl=lamps`' placement of its fetch: tables::lobe_fit::polynomial, the lean w of
 // normalize(mix(R, N, w)) and √α′ of the fetch that come closest to the lobe in L²
-// (ibl_lobe_fit's table) as two polynomials in (√μ, √α), a dozen operations where the table
-// is a texture fetch.
-vec2 ibl_lobe_fit_polynomial(float n_dot_v, float alpha) {
+// (ibl_lobe_fit's table) as two polynomials in (√μ, √α), in two steps where the table is a
+// texture fetch: the terms in √μ alone (the lean's constant and √α terms, the root's; the
+// same for every lobe of a point, whose directions all make the view's angle with the
+// normal), then per lobe three multiply-adds in √α.
+vec4 ibl_lobe_fit_terms(float n_dot_v) {
     float s = sqrt(clamp(n_dot_v, 0.0, 1.0));
+    return vec4(IBL_LAMPS_LEAN[0] + s * (IBL_LAMPS_LEAN[2] + s * IBL_LAMPS_LEAN[4]),
+                IBL_LAMPS_LEAN[1] + s * IBL_LAMPS_LEAN[3],
+                IBL_LAMPS_ROOT[0] + s * (IBL_LAMPS_ROOT[2] + s * IBL_LAMPS_ROOT[4]),
+                IBL_LAMPS_ROOT[1] + s * (IBL_LAMPS_ROOT[3] + s * IBL_LAMPS_ROOT[5]));
+}
+
+vec2 ibl_lobe_fit_polynomial(vec4 terms, float alpha) {
     float r = sqrt(clamp(alpha, 0.0, 1.0));
-    float w = IBL_LAMPS_LEAN[0] + r * (IBL_LAMPS_LEAN[1] + r * IBL_LAMPS_LEAN[5])
-        + s * (IBL_LAMPS_LEAN[2] + r * IBL_LAMPS_LEAN[3] + s * IBL_LAMPS_LEAN[4]);
-    float root = IBL_LAMPS_ROOT[0] + r * IBL_LAMPS_ROOT[1]
-        + s * (IBL_LAMPS_ROOT[2] + r * IBL_LAMPS_ROOT[3]
-               + s * (IBL_LAMPS_ROOT[4] + r * IBL_LAMPS_ROOT[5]));
+    float w = terms.x + r * (terms.y + r * IBL_LAMPS_LEAN[5]);
+    float root = terms.z + r * terms.w;
     return clamp(vec2(r * r * w, r * root), 0.0, 1.0);
 }
 

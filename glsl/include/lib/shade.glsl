@@ -18,8 +18,10 @@ vec3 shade_n;
 vec3 shade_v;
 float shade_n_dot_v;
 vec3 shade_sum;
-// ibl=lamps: the share of the last lobe_fetch that read the cube without the lamps.
+// ibl=lamps: the share of the last lobe_fetch that read the cube without the lamps, and the
+// terms of its placement in the view's angle alone (ibl_lobe_fit_terms).
 float shade_lamps_share;
+vec4 shade_fit_terms;
 
 // The mirror image of direction `d` in the tangent plane of normal `n`: where a lobe that
 // transmits through a thin slab reads what a reflection lobe would read at `d`.
@@ -46,7 +48,7 @@ vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
         dir = r;
         mip = 0.0;
     } else if (IBL == IBL_LAMPS) {
-        vec2 fit = ibl_lobe_fit_polynomial(dot(n, r), alpha);
+        vec2 fit = ibl_lobe_fit_polynomial(shade_fit_terms, alpha);
         dir = mix(r, n, fit.x);
         float own = ibl_mip_of_alpha(alpha, frame.params.x);
         mip = max(fit.y * (frame.params.x - 1.0), min(own, 2.0));
@@ -233,6 +235,9 @@ void shade_begin(vec3 p, vec3 n, vec3 v, float n_dot_v) {
     shade_v = v;
     shade_n_dot_v = n_dot_v;
     shade_sum = vec3(0.0);
+    if (IBL == IBL_LAMPS) {
+        shade_fit_terms = ibl_lobe_fit_terms(n_dot_v);
+    }
 }
 
 vec3 shade_ggx(vec3 n, vec3 v, float n_dot_v) {
