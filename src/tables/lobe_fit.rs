@@ -129,7 +129,7 @@ fn albedo(v: DVec3, alpha: f64) -> f64 {
 /// fetch (away from the normal view).
 pub const POLYNOMIAL_GRID: [(f64, f64, u32); 2] = [(0.1, 0.9, 9), (0.25, 0.85, 9)];
 
-/// The terms of the lean's and √α′'s polynomials at (√μ, √α), before the factor α or √α.
+/// The terms of the lean's and √α′'s polynomials at (√μ, √α), before their factor √α.
 fn polynomial_terms(s: f64, r: f64) -> ([f64; 6], [f64; 6]) {
     (
         [1.0, r, s, s * r, s * s, r * r],
@@ -144,7 +144,7 @@ pub fn polynomial(mu: f64, alpha: f64) -> (f64, f64) {
     let (lean, root) = polynomial_terms(s, r);
     let dot = |c: &[f64; 6], t: &[f64; 6]| c.iter().zip(t).map(|(c, t)| c * t).sum::<f64>();
     (
-        (r * r * dot(&LAMPS_LEAN_COEFFICIENTS, &lean)).clamp(0.0, 1.0),
+        (r * dot(&LAMPS_LEAN_COEFFICIENTS, &lean)).clamp(0.0, 1.0),
         (r * dot(&LAMPS_ROOT_COEFFICIENTS, &root)).clamp(0.0, 1.0),
     )
 }
@@ -248,7 +248,10 @@ mod tests {
         for i in 0..s_n {
             for j in 0..r_n {
                 let (s, r) = (at(s_lo, s_hi, s_n, i), at(r_lo, r_hi, r_n, j));
-                points.push((s, r, fit(s * s, r * r, &kernels)));
+                let (mu, alpha) = (s * s, r * r);
+                let m = super::super::lobe_moments::mean_direction(mu, alpha);
+                let mean = super::super::lobe_moments::mean_lean(mu, m);
+                points.push((s, r, (mean, fit(mu, alpha, &kernels).1)));
             }
         }
         let rows = |root: bool| -> Vec<([f64; 6], f64)> {
@@ -259,7 +262,7 @@ mod tests {
                     if root {
                         (spread.map(|t| t * r), root_alpha)
                     } else {
-                        (lean.map(|t| t * r * r), w)
+                        (lean.map(|t| t * r), w)
                     }
                 })
                 .collect()

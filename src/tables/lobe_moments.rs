@@ -191,6 +191,13 @@ fn two_points(variance: f64, skew: f64) -> (f64, f64) {
     ((r + s) / 2.0, (r - s) / 2.0)
 }
 
+/// The weight w of normalize(mix(R, N, w)) that points along the lobe's mean direction `m`
+/// ([`mean_direction`]) at view cosine `mu`.
+pub fn mean_lean(mu: f64, m: DVec3) -> f64 {
+    let r = DVec3::new(-(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+    mix_weight(mu.acos(), m.normalize().dot(r).clamp(-1.0, 1.0).acos())
+}
+
 /// The weight w of normalize(mix(R, N, w)) that points `lean` radians from R towards N, R
 /// at `theta` radians from N.
 pub(super) fn mix_weight(theta: f64, lean: f64) -> f64 {
@@ -304,9 +311,7 @@ fn compute(size: u32) -> Vec<f32> {
                 return [0.0; VALUES];
             }
             let (m, [along, across, skew]) = lobe_moments(mu, root_alpha * root_alpha);
-            let r = DVec3::new(-(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
-            let lean = m.normalize().dot(r).clamp(-1.0, 1.0).acos();
-            let w = mix_weight(mu.acos(), lean);
+            let w = mean_lean(mu, m);
             let root = matched_root_alpha(&spread, m.length());
             let minor = variance_root_alpha(&variance, along.min(across));
             let (up, down) = two_points((along - across).max(0.0), skew);

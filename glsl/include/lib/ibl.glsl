@@ -99,7 +99,7 @@ vec2 ibl_lobe_fit_polynomial(vec4 terms, float alpha) {
     float r = sqrt(clamp(alpha, 0.0, 1.0));
     float w = terms.x + r * (terms.y + r * IBL_LAMPS_LEAN[5]);
     float root = terms.z + r * terms.w;
-    return clamp(vec2(r * r * w, r * root), 0.0, 1.0);
+    return clamp(r * vec2(w, root), 0.0, 1.0);
 }
 
 // The irradiance E(n) of an environment given by its order-2 spherical-harmonic coefficients,
