@@ -241,10 +241,11 @@ axis!(
         Anisotropic = "anisotropic",
         /// The environment's lamps taken out of the map (`tables::lamps`: its small regions
         /// far brighter than its mean) and lit as disk lights, each lobe evaluated at each
-        /// lamp as an analytic light is (the pass holds them as constants); the rest read in
-        /// one fetch where `Matched`'s L² fit places it (`tables::lobe_fit::polynomial`: two
-        /// polynomials in place of its table), from a cube of the map without them prefiltered
-        /// with the lobe's own weights (as the matched cube is) at Karis's levels.
+        /// lamp as an analytic light is (the pass holds them as constants); the rest, a smooth
+        /// map, read in one fetch along the lobe's mean direction (`tables::lobe_moments`) at
+        /// the mip of `Matched`'s L² fit (`tables::lobe_fit::polynomial`: two polynomials in
+        /// place of the tables), from a cube of the map without them prefiltered with the
+        /// lobe's own weights (as the matched cube is) at Karis's levels.
         Lamps = "lamps",
     }
 );

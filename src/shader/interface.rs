@@ -189,8 +189,8 @@ pub const LOBE_MOMENTS_SIZE: u32 = 32;
 
 /// `ibl=lamps`' placement of its fetch (`IBL_LAMPS_LEAN` and `IBL_LAMPS_ROOT` in
 /// generated/codes.glsl; `tables::lobe_fit::polynomial`, whose test refits them): the lean
-/// w = α · (c₀ + c₁√α + c₂√μ + c₃√μ√α + c₄μ + c₅α), which vanishes with α as a
-/// mirror lobe's does.
+/// of the lobe's mean direction w = √α · (c₀ + c₁√α + c₂√μ + c₃√μ√α + c₄μ + c₅α), which
+/// vanishes with α as a mirror lobe's does.
 pub const LAMPS_LEAN_COEFFICIENTS: [f64; 6] = [
     0.8757772565057736,
     0.7859649637438431,
@@ -200,7 +200,7 @@ pub const LAMPS_LEAN_COEFFICIENTS: [f64; 6] = [
     -0.833911983208834,
 ];
 
-/// `ibl=lamps`' √α′ = √α · (c₀ + c₁√α + c₂√μ + c₃√μ√α + c₄μ + c₅μ√α), c₀ + c₂ + c₄ ≈ 1 at a
+/// `ibl=lamps`' √α′ (the L² fit's) = √α · (c₀ + c₁√α + c₂√μ + c₃√μ√α + c₄μ + c₅μ√α), c₀ + c₂ + c₄ ≈ 1 at a
 /// normal view.
 pub const LAMPS_ROOT_COEFFICIENTS: [f64; 6] = [
     0.3628165938178354,

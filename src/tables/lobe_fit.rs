@@ -22,9 +22,12 @@
 //! [`REFINEMENTS`] refinements around the best point.
 //!
 //! `ibl=lamps` places its one fetch of the rest of the map with [`polynomial`], two small
-//! polynomials in (√μ, √α) least-squares fitted to this fit on the grid [`POLYNOMIAL_GRID`]
-//! (the test `the_polynomial_is_the_least_squares_fit_on_its_grid` refits them and prints
-//! the refit): a dozen arithmetic operations where the table's lookup is a texture fetch.
+//! polynomials in (√μ, √α) least-squares fitted on the grid [`POLYNOMIAL_GRID`] (the test
+//! `the_polynomial_is_the_least_squares_fit_on_its_grid` refits them and prints the refit):
+//! the lean of the lobe's mean direction (`lobe_moments::mean_lean`: the rest is the map
+//! without its lamps, a smooth environment, which the moments fit) and the mip of this fit
+//! (which reads sharper than the moments' spread, what helps under a sky); a few arithmetic
+//! operations where the table's lookup is a texture fetch.
 
 use glam::DVec3;
 
@@ -137,8 +140,8 @@ fn polynomial_terms(s: f64, r: f64) -> ([f64; 6], [f64; 6]) {
     )
 }
 
-/// The polynomial twin of [`fit`] that `ibl=lamps` evaluates (lib/ibl.glsl's
-/// ibl_lobe_fit_polynomial): the lean w and √α′, each clamped to [0, 1].
+/// The polynomials that `ibl=lamps` evaluates (lib/ibl.glsl's ibl_lobe_fit_polynomial): the
+/// lean w of the lobe's mean direction and [`fit`]'s √α′, each clamped to [0, 1].
 pub fn polynomial(mu: f64, alpha: f64) -> (f64, f64) {
     let (s, r) = (mu.clamp(0.0, 1.0).sqrt(), alpha.clamp(0.0, 1.0).sqrt());
     let (lean, root) = polynomial_terms(s, r);

@@ -82,11 +82,12 @@ vec2 ibl_lobe_fit(sampler2D table, float n_dot_v, float alpha) {
 }
 
 // `ibl=lamps`' placement of its fetch: tables::lobe_fit::polynomial, the lean w of
-// normalize(mix(R, N, w)) and √α′ of the fetch that come closest to the lobe in L²
-// (ibl_lobe_fit's table) as two polynomials in (√μ, √α), in two steps where the table is a
-// texture fetch: the terms in √μ alone (the lean's constant and √α terms, the root's; the
-// same for every lobe of a point, whose directions all make the view's angle with the
-// normal), then per lobe three multiply-adds in √α.
+// normalize(mix(R, N, w)) along the lobe's mean direction (ibl_lobe_moments' x) and the √α′
+// of the fetch that comes closest to the lobe in L² (ibl_lobe_fit's y) as two polynomials
+// in (√μ, √α), in two steps where the tables are a texture fetch: the terms in √μ alone
+// (the lean's constant and √α terms, the root's; the same for every lobe of a point, whose
+// directions all make the view's angle with the normal), then per lobe three multiply-adds
+// in √α.
 vec4 ibl_lobe_fit_terms(float n_dot_v) {
     float s = sqrt(clamp(n_dot_v, 0.0, 1.0));
     return vec4(IBL_LAMPS_LEAN[0] + s * (IBL_LAMPS_LEAN[2] + s * IBL_LAMPS_LEAN[4]),

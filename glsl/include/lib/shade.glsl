@@ -32,8 +32,9 @@ vec3 shade_behind(vec3 n, vec3 d) {
 // One fetch of the environment for a lobe of roughness α around `r` (`behind`: mirrored):
 // `ibl=split-sum`, Karis's cube along Lagarde's dominant direction at the lobe's own mip;
 // `ibl=matched`, the matched cube where its kernel comes closest to the lobe in L²
-// (lib/ibl.glsl's ibl_lobe_fit); `ibl=lamps` where that fit's polynomial places it
-// (ibl_lobe_fit_polynomial), but no sharper than the split sum's mip of α up to mip 2 (where
+// (lib/ibl.glsl's ibl_lobe_fit); `ibl=lamps` along the lobe's mean direction at that fit's
+// mip, both by polynomials (ibl_lobe_fit_polynomial: the rest is a smooth map, which the
+// mean direction fits), but no sharper than the split sum's mip of α up to mip 2 (where
 // the lamps leave the cube: sharper, a lobe would read them from the cube, through the
 // kernel of a sharper lobe), from the lamps' cube (the lobe's own weights at Karis's levels)
 // of the map without its lamps from mip 2 (tables::lamps, tables::environment), which the
