@@ -317,9 +317,7 @@ mod tests {
         let spread = super::super::lobe_moments::spread_samples();
         let (mu, alpha) = (0.3f64, 0.2);
         let m = super::super::lobe_moments::mean_direction(mu, alpha);
-        let r = DVec3::new(-(1.0 - mu * mu).sqrt(), 0.0, mu);
-        let lean = m.normalize().dot(r).acos();
-        let moments_w = super::super::lobe_moments::mix_weight(mu.acos(), lean);
+        let moments_w = super::super::lobe_moments::mean_lean(mu, m);
         let moments_root = super::super::lobe_moments::matched_root_alpha(&spread, m.length());
         let (w, root) = fit(mu, alpha, &kernels);
         println!(
