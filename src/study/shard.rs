@@ -1,7 +1,8 @@
 //! Sweeps over many machines: `lamina sweep FILE --shard K/N` runs shard K of N of every study
 //! — a deterministic share of its points (every N-th from the K-th, so that each shard gets
-//! some of every axis) with the `ggx` baselines those points need, and of a reference study's
-//! materials — and writes a complete results directory that says which share it holds
+//! some of every axis; in a study that measures image error, every point of every N-th
+//! material, whose references are the costly part) with the `ggx` baselines those points
+//! need, and of a reference study's materials — and writes a complete results directory that says which share it holds
 //! ([`ShardMeta`] in `study.json`). `lamina merge` ([`merge`]) joins the N directories into
 //! the whole study's, as one run of it would have written it (the runs' timings are each
 //! shard's own). Any scheduler runs the shards: a CI matrix, a Slurm array, Kubernetes indexed
@@ -78,7 +79,17 @@ pub struct ShardMeta {
 /// reference materials and random stacks.
 pub fn apply(study: &mut Study, shard: Shard) {
     let total_points = study.points.len();
-    let points: Vec<usize> = (0..total_points).filter(|&i| shard.takes(i)).collect();
+    let points: Vec<usize> = if study.image_error_spp.is_some() {
+        // A study that measures image error renders each material's references once for all
+        // its points: its shards take whole materials, every N-th, so that no two shards
+        // render the same references.
+        let materials = point_materials(study);
+        (0..total_points)
+            .filter(|&i| shard.takes(materials[i]))
+            .collect()
+    } else {
+        (0..total_points).filter(|&i| shard.takes(i)).collect()
+    };
     study.points = points.iter().map(|&i| study.points[i].clone()).collect();
     study.plan = Plan::new(study.points.iter().map(|p| p.case.clone()).collect());
     let (mut reference, mut total_reference) = (Vec::new(), 0);
@@ -109,6 +120,23 @@ pub fn apply(study: &mut Study, shard: Shard) {
         reference,
         total_reference,
     });
+}
+
+/// Each point's material: the index of its stack's name among the study's, in the order they
+/// first appear.
+fn point_materials(study: &Study) -> Vec<usize> {
+    let mut names: Vec<&str> = Vec::new();
+    study
+        .points
+        .iter()
+        .map(|p| {
+            let name = p.case.stack.name.as_str();
+            names.iter().position(|&n| n == name).unwrap_or_else(|| {
+                names.push(name);
+                names.len() - 1
+            })
+        })
+        .collect()
 }
 
 fn refuse(path: &Path, message: String) -> Error {

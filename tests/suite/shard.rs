@@ -1,6 +1,7 @@
 //! `lamina sweep --shard K/N` and `lamina merge`: a suite run whole and in three shards gives
-//! the same results up to timing, each shard carries the baselines its points need, and
-//! merging refuses what does not belong together, writing nothing.
+//! the same results up to timing, each shard carries the baselines its points need, a study
+//! that measures image error is split by material, and merging refuses what does not belong
+//! together, writing nothing.
 
 use std::path::Path;
 
@@ -36,6 +37,19 @@ interfaces = ["single", "multiple"]
 count = 2
 seed = 3
 paths = 1000
+"#;
+
+const ERROR: &str = r#"
+name = "error"
+materials = ["gold", "varnished-gold", "lacquered-copper"]
+base = "mode=specialized"
+size = "32x32"
+frames = 1
+warmup = 0
+reference_spp = 4
+[[axis]]
+name = "ibl"
+values = ["split-sum", "matched"]
 "#;
 
 fn json(path: &Path) -> Value {
@@ -75,9 +89,10 @@ fn a_suite_in_three_shards_merges_into_the_whole_run() {
     let dir = common::scratch_dir("shard-suite");
     std::fs::write(dir.join("grid.toml"), GRID).unwrap();
     std::fs::write(dir.join("truth.toml"), TRUTH).unwrap();
+    std::fs::write(dir.join("error.toml"), ERROR).unwrap();
     std::fs::write(
         dir.join("suite.toml"),
-        "studies = [\"grid.toml\", \"truth.toml\"]\n",
+        "studies = [\"grid.toml\", \"truth.toml\", \"error.toml\"]\n",
     )
     .unwrap();
     run(
@@ -111,8 +126,22 @@ fn a_suite_in_three_shards_merges_into_the_whole_run() {
             );
         }
     }
+    // A study that measures image error is split by material: each material's points, and its
+    // references, in one shard.
+    let mut seen: Vec<(usize, String)> = Vec::new();
+    for k in 1..=3 {
+        let results = json(&dir.join(format!("s{k}/error/results.json")));
+        for r in results["runs"].as_array().unwrap() {
+            let material = r["material"].as_str().unwrap().to_owned();
+            assert!(
+                !seen.iter().any(|(j, m)| *m == material && *j != k),
+                "{material}: in shard {k} and another"
+            );
+            seen.push((k, material));
+        }
+    }
     run(&["merge", "s1", "s2", "s3", "--out", "merged"], &dir);
-    for study in ["grid", "truth"] {
+    for study in ["grid", "truth", "error"] {
         let whole = dir.join("whole").join(study);
         let merged = dir.join("merged").join(study);
         let (w, m) = (
@@ -143,6 +172,7 @@ fn a_suite_in_three_shards_merges_into_the_whole_run() {
 fn merge_refuses_what_does_not_belong_together_and_writes_nothing() {
     let dir = common::scratch_dir("shard-refusals");
     std::fs::write(dir.join("truth.toml"), TRUTH).unwrap();
+    std::fs::write(dir.join("error.toml"), ERROR).unwrap();
     for k in 1..=2 {
         let shard = format!("{k}/2");
         run(
