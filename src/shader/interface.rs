@@ -200,8 +200,8 @@ pub const LAMPS_LEAN_COEFFICIENTS: [f64; 6] = [
     -0.833911983208834,
 ];
 
-/// `ibl=lamps`' √α′ (the L² fit's) = √α · (c₀ + c₁√α + c₂√μ + c₃√μ√α + c₄μ + c₅μ√α), c₀ + c₂ + c₄ ≈ 1 at a
-/// normal view.
+/// `ibl=lamps`' √α′ (the L² fit's) = √α · (c₀ + c₁√α + c₂√μ + c₃√μ√α + c₄μ + c₅μ√α),
+/// c₀ + c₂ + c₄ ≈ 1 at a normal view.
 pub const LAMPS_ROOT_COEFFICIENTS: [f64; 6] = [
     0.3628165938178354,
     0.9318763117408332,

@@ -2,11 +2,11 @@
 //! — a deterministic share of its points (every N-th from the K-th, so that each shard gets
 //! some of every axis; in a study that measures image error, every point of every N-th
 //! material, whose references are the costly part) with the `ggx` baselines those points
-//! need, and of a reference study's materials — and writes a complete results directory that says which share it holds
-//! ([`ShardMeta`] in `study.json`). `lamina merge` ([`merge`]) joins the N directories into
-//! the whole study's, as one run of it would have written it (the runs' timings are each
-//! shard's own). Any scheduler runs the shards: a CI matrix, a Slurm array, Kubernetes indexed
-//! jobs (README, "Sweeps over many machines").
+//! need, and of a reference study's materials — and writes a complete results directory that
+//! says which share it holds ([`ShardMeta`] in `study.json`). `lamina merge` ([`merge`])
+//! joins the N directories into the whole study's, as one run of it would have written it (the
+//! runs' timings are each shard's own). Any scheduler runs the shards: a CI matrix, a Slurm
+//! array, Kubernetes indexed jobs (README, "Sweeps over many machines").
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

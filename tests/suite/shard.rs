@@ -172,7 +172,6 @@ fn a_suite_in_three_shards_merges_into_the_whole_run() {
 fn merge_refuses_what_does_not_belong_together_and_writes_nothing() {
     let dir = common::scratch_dir("shard-refusals");
     std::fs::write(dir.join("truth.toml"), TRUTH).unwrap();
-    std::fs::write(dir.join("error.toml"), ERROR).unwrap();
     for k in 1..=2 {
         let shard = format!("{k}/2");
         run(
