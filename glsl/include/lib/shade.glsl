@@ -32,16 +32,19 @@ vec3 shade_behind(vec3 n, vec3 d) {
 // One fetch of the environment for a lobe of roughness α around `r` (`behind`: mirrored):
 // `ibl=split-sum`, Karis's cube along Lagarde's dominant direction at the lobe's own mip;
 // `ibl=matched`, the matched cube where its kernel comes closest to the lobe in L²
-// (lib/ibl.glsl's ibl_lobe_fit); `ibl=lamps` along the lobe's mean direction at that fit's
-// mip, both by polynomials (ibl_lobe_fit_polynomial: the rest is a smooth map, which the
-// mean direction fits), but no sharper than the split sum's mip of α up to mip 2 (where
-// the lamps leave the cube: sharper, a lobe would read them from the cube, through the
-// kernel of a sharper lobe), from the lamps' cube (the lobe's own weights at Karis's levels)
-// of the map without its lamps from mip 2 (tables::lamps, tables::environment), which the
-// `matched` binding then holds (lobe_lamps adds them); the others, the matched cube along
-// the lobe's mean direction at the mip of its spread (ibl_lobe_moments), `ibl=anisotropic` in
-// two fetches that match its second moments too. A mirror lobe reads mip 0, the whole map,
-// along `r` either way.
+// (lib/ibl.glsl's ibl_lobe_fit); `ibl=lamps` along the lobe's mean direction at that fit's mip,
+// both by polynomials (ibl_lobe_fit_polynomial: the rest is a smooth map, which the mean
+// direction fits), but no sharper than the split sum's mip of α up to mip 2 (where the lamps
+// leave the cube: sharper, a lobe would read them from the cube, through the kernel of a sharper
+// lobe), from the lamps' cube (the lobe's own weights at Karis's levels) of the map without its
+// lamps from mip 2 (tables::lamps, tables::environment), which the `matched` binding then holds
+// (lobe_lamps adds them). Its lean goes with the share of the fetch that reads the rest
+// (shade_lamps_share): below mip 2 the fetch still reads the lamps, whose light a near-mirror
+// lobe sends back from its peak, the mirror direction, not from its mean (at grazing views the
+// whole lean put the fetch of a glaze of α 0.02 off the sun's reflection); the others, the
+// matched cube along the lobe's mean direction at the mip of its spread (ibl_lobe_moments),
+// `ibl=anisotropic` in two fetches that match its second moments too. A mirror lobe reads mip 0,
+// the whole map, along `r` either way.
 vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
     vec3 dir;
     float mip;
@@ -50,9 +53,9 @@ vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
         mip = 0.0;
     } else if (IBL == IBL_LAMPS) {
         vec2 fit = ibl_lobe_fit_polynomial(shade_fit_terms, alpha);
-        dir = mix(r, n, fit.x);
         float own = ibl_mip_of_alpha(alpha, frame.params.x);
         mip = max(fit.y * (frame.params.x - 1.0), min(own, 2.0));
+        dir = mix(r, n, fit.x * clamp(mip - 1.0, 0.0, 1.0));
     } else if (IBL == IBL_SPLIT_SUM) {
         dir = ibl_dominant_direction(n, r, alpha);
         mip = ibl_mip_of_alpha(alpha, frame.params.x);
