@@ -29,6 +29,12 @@ vec3 shade_behind(vec3 n, vec3 d) {
     return d - 2.0 * dot(n, d) * n;
 }
 
+// The share of a fetch of the lamps' cube at `mip` that reads the map without its lamps: none
+// up to mip 1, which holds the whole map, all from mip 2 (tables::environment's lamps' cube).
+float lamps_share_at(float mip) {
+    return clamp(mip - 1.0, 0.0, 1.0);
+}
+
 // One fetch of the environment for a lobe of roughness α around `r` (`behind`: mirrored):
 // `ibl=split-sum`, Karis's cube along Lagarde's dominant direction at the lobe's own mip;
 // `ibl=matched`, the matched cube where its kernel comes closest to the lobe in L²
@@ -55,7 +61,7 @@ vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
         vec2 fit = ibl_lobe_fit_polynomial(shade_fit_terms, alpha);
         float own = ibl_mip_of_alpha(alpha, frame.params.x);
         mip = max(fit.y * (frame.params.x - 1.0), min(own, 2.0));
-        dir = mix(r, n, fit.x * clamp(mip - 1.0, 0.0, 1.0));
+        dir = mix(r, n, fit.x * lamps_share_at(mip));
     } else if (IBL == IBL_SPLIT_SUM) {
         dir = ibl_dominant_direction(n, r, alpha);
         mip = ibl_mip_of_alpha(alpha, frame.params.x);
@@ -84,7 +90,7 @@ vec3 lobe_fetch(vec3 n, vec3 r, float alpha, bool behind) {
         mip = ibl_matched_mip_of_alpha(moments.y * moments.y, frame.params.x);
     }
     dir = behind ? shade_behind(n, dir) : dir;
-    shade_lamps_share = clamp(mip - 1.0, 0.0, 1.0);
+    shade_lamps_share = lamps_share_at(mip);
     return IBL == IBL_SPLIT_SUM ? textureLod(prefiltered, dir, mip).rgb
                                 : textureLod(matched, dir, mip).rgb;
 }
