@@ -721,10 +721,7 @@ impl<'g> Renderer<'g> {
                 self.frame_index as f32,
                 f32::from_bits(self.seed),
             ],
-            irradiance: match pass.key.variant.ibl {
-                Ibl::Lamps => self.environment.lamps_irradiance,
-                _ => self.environment.irradiance,
-            },
+            irradiance: self.environment.irradiance,
         };
         let uniforms = Buffer::with_data(
             device,
@@ -764,6 +761,11 @@ impl<'g> Renderer<'g> {
                 )))
             }
         };
+        // Built with the lamps' cube; any other pass never reads it.
+        let irradiance = self
+            .environment
+            .lamps_irradiance_view()
+            .unwrap_or(&self.environment.view);
         let mut scene = DescriptorSet::new(device, &self.scene_layout, "scene")?;
         scene
             .write(0, Resource::Buffer(&uniforms))
@@ -773,7 +775,8 @@ impl<'g> Renderer<'g> {
             // A pass whose `ibl` reads the matched cube built it when it was prepared; any
             // other never reads the binding, which holds the Karis cube until then.
             .write(4, Resource::Sampled(matched, &self.sampler))
-            .write(5, Resource::Sampled(&self.moments.view, &self.sampler));
+            .write(5, Resource::Sampled(&self.moments.view, &self.sampler))
+            .write(6, Resource::Sampled(irradiance, &self.sampler));
         Ok(FrameSets {
             shading,
             scene,

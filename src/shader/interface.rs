@@ -382,7 +382,7 @@ pub fn material_buffer(
 pub const SCENE_SET: u32 = 1;
 
 /// The scene set's bindings, as `glsl/include/bindings/scene.glsl` declares them.
-pub const SCENE_BINDINGS: [Binding; 6] = [
+pub const SCENE_BINDINGS: [Binding; 7] = [
     Binding {
         binding: 0,
         kind: BindingKind::UniformBuffer,
@@ -412,6 +412,11 @@ pub const SCENE_BINDINGS: [Binding; 6] = [
         binding: 5,
         kind: BindingKind::SampledImage,
         name: "lobe_moments",
+    },
+    Binding {
+        binding: 6,
+        kind: BindingKind::SampledImage,
+        name: "lamps_irradiance",
     },
 ];
 

@@ -17,7 +17,9 @@
 //!    and 1 the whole map's (a sharp lobe reads each lamp's own shape there). It is
 //!    prefiltered as the matched cube is, at the levels of Karis's, so that `ibl=lamps` reads
 //!    it with the split sum's fetch: Karis's blurrier source mips spread a lamp over the dark
-//!    around it, which a near-mirror lobe reading mip 1 saw (profiling/README.md).
+//!    around it, which a near-mirror lobe reading mip 1 saw (profiling/README.md). With it the
+//!    host sums the rest's irradiance into a small cube ([`irradiance_cube`]), which lights a
+//!    diffuse base under `ibl=lamps` where the others read the order-2 harmonics.
 
 use std::f64::consts::PI;
 
@@ -174,17 +176,17 @@ pub struct Environment {
     lamps: Lamps,
     /// Karis's cube of the rest, once [`Environment::build_lamps`] built it.
     lamps_cube: Option<(Image, ImageView)>,
+    /// The rest's irradiance ([`irradiance_cube`], RGBA16F, one mip), built with the lamps'
+    /// cube: what an `ibl=lamps` pass lights a diffuse base with, adding the lamps as lights.
+    lamps_irradiance: Option<(Image, ImageView)>,
     /// The source cube (every mip, `ComputeRead`), kept for the matched cube.
     source: Image,
     source_view: ImageView,
     cube_sampler: Sampler,
     pub desc: EnvDesc,
     /// The irradiance's order-2 spherical harmonics ([`irradiance_sh`]), which the forward
-    /// pass lights a diffuse base with.
+    /// pass lights a diffuse base with (but under `ibl=lamps`).
     pub irradiance: [[f32; 4]; 9],
-    /// The same of the map without its lamps, which an `ibl=lamps` pass lights a diffuse base
-    /// with, adding the lamps as lights.
-    pub lamps_irradiance: [[f32; 4]; 9],
     /// [`sampling_tables`], the scene set's `EnvironmentSampling`.
     pub sampling: Buffer,
 }
@@ -212,9 +214,9 @@ impl Environment {
             cube,
             view,
             matched: None,
-            lamps_irradiance: irradiance_sh(&lamps.residual),
             lamps,
             lamps_cube: None,
+            lamps_irradiance: None,
             source,
             source_view,
             cube_sampler,
@@ -266,12 +268,21 @@ impl Environment {
             };
             self.lamps_cube = Some(prefiltered_cube(gpu, sources, self.desc, &LAMPS_CUBE)?);
         }
+        if self.lamps_irradiance.is_none() {
+            let texels = irradiance_cube(&self.lamps.residual, IRRADIANCE_FACE);
+            self.lamps_irradiance = Some(upload_cube(gpu, &texels, IRRADIANCE_FACE, "irradiance")?);
+        }
         Ok(())
     }
 
     /// The lamps' cube, once built.
     pub fn lamps_view(&self) -> Option<&ImageView> {
         self.lamps_cube.as_ref().map(|(_, view)| view)
+    }
+
+    /// The irradiance cube of the map without its lamps, built with the lamps' cube.
+    pub fn lamps_irradiance_view(&self) -> Option<&ImageView> {
+        self.lamps_irradiance.as_ref().map(|(_, view)| view)
     }
 
     /// Reads mip `mip` of the cube of `weighting` back as RGBA f32 texels, face-major (faces in
@@ -423,6 +434,35 @@ fn prefiltered_cube(
     })?;
     let view = cube.view(name)?;
     Ok((cube, view))
+}
+
+/// A half-float cube of one mip holding `texels` (`face` a side, face-major, rows top to
+/// bottom), in `FragmentRead` state.
+fn upload_cube(
+    gpu: &Gpu,
+    texels: &[[f32; 4]],
+    face: u32,
+    name: &str,
+) -> Result<(Image, ImageView)> {
+    let device = &gpu.device;
+    let halves: Vec<f16> = texels
+        .iter()
+        .flatten()
+        .map(|&c| f16::from_f32(c.min(HALF_MAX)))
+        .collect();
+    let image = Image::new(
+        device,
+        ImageDesc::new_cube(Format::R16G16B16A16_SFLOAT, face),
+        name,
+    )?;
+    upload_image(
+        device,
+        &image,
+        bytemuck::cast_slice(&halves),
+        ImageState::FragmentRead,
+    )?;
+    let view = image.view(name)?;
+    Ok((image, view))
 }
 
 /// The equirectangular map as a half-float 2-D image the conversion samples.
@@ -588,6 +628,64 @@ pub fn irradiance_sh(equirect: &HdrImage) -> [[f32; 4]; 9] {
             0.0,
         ]
     })
+}
+
+/// Texels per face of the lamps' irradiance cube ([`irradiance_cube`]): 2.8° apart, where the
+/// irradiance changes over the cosine lobe's 90°.
+pub const IRRADIANCE_FACE: u32 = 32;
+
+/// Columns and rows of the cells [`irradiance_cube`] sums over: 2.8° apart.
+const IRRADIANCE_CELLS: (usize, usize) = (128, 64);
+
+/// The irradiance E(n) = ∫ L(ω) max(n·ω, 0) dω of an equirectangular environment at the
+/// centre of each texel of a cube of `face` texels a side, as RGBA f32 (alpha 1), face-major
+/// in Vulkan order, rows top to bottom ([`cube_direction`]'s mapping). Exact where
+/// [`irradiance_sh`]'s order-2 harmonics ring, up to its cells: a sum over
+/// [`IRRADIANCE_CELLS`] equirect cells, each its power L·dω at its power-weighted mean
+/// direction (a lamp's own where one lies in the cell). A map finer than the cells is summed
+/// into them texel by texel, a coarser one split into them.
+pub fn irradiance_cube(equirect: &HdrImage, face: u32) -> Vec<[f32; 4]> {
+    use rayon::prelude::*;
+    let (w, h) = (equirect.width, equirect.height);
+    let (cols, rows) = IRRADIANCE_CELLS;
+    // The finer of the map and the cells: each of its points one texel's radiance.
+    let (fine_w, fine_h) = (w.max(cols), h.max(rows));
+    let mut cells = vec![(DVec3::ZERO, [0.0f64; 3]); cols * rows];
+    for y in 0..fine_h {
+        let d_omega = texel_solid_angle(y, fine_w, fine_h);
+        for x in 0..fine_w {
+            let p = equirect.pixel(x * w / fine_w, y * h / fine_h);
+            let weight = f64::from(p[0] + p[1] + p[2]).max(1e-6) * d_omega;
+            let (dir, power) = &mut cells[(y * rows / fine_h) * cols + x * cols / fine_w];
+            *dir += equirect_direction(x, y, fine_w, fine_h) * weight;
+            for c in 0..3 {
+                power[c] += f64::from(p[c]) * d_omega;
+            }
+        }
+    }
+    let cells: Vec<(DVec3, [f64; 3])> = cells
+        .into_iter()
+        .map(|(dir, power)| (dir.normalize_or_zero(), power))
+        .collect();
+    let texels = (face * face) as usize;
+    (0..6 * texels)
+        .into_par_iter()
+        .map(|k| {
+            let (f, i) = ((k / texels) as u32, k % texels);
+            let (x, y) = ((i % face as usize) as f64, (i / face as usize) as f64);
+            let n = cube_direction(f, (x + 0.5) / f64::from(face), (y + 0.5) / f64::from(face));
+            let mut e = [0.0f64; 3];
+            for (d, power) in &cells {
+                let cos = n.dot(*d);
+                if cos > 0.0 {
+                    for c in 0..3 {
+                        e[c] += power[c] * cos;
+                    }
+                }
+            }
+            [e[0] as f32, e[1] as f32, e[2] as f32, 1.0]
+        })
+        .collect()
 }
 
 /// Direction through cube face `face` at face coordinates (u, v) ∈ [0,1]²: the CPU mirror of
@@ -768,6 +866,95 @@ mod tests {
         // Eight levels: about twice α a level, where √α steps quadruple mip 1's α at mip 2.
         let ratio = matched_alpha_of_mip(2, 8) / matched_alpha_of_mip(1, 8);
         assert!((ratio - 49f64.powf(1.0 / 6.0)).abs() < 1e-12 && ratio < 2.0);
+    }
+
+    /// A `w`×`h` equirect map of radiance `f(d)` (grey) at each texel's centre.
+    fn map_of(w: usize, h: usize, f: impl Fn(DVec3) -> f64) -> HdrImage {
+        let pixels = (0..w * h)
+            .map(|k| {
+                let v = f(equirect_direction(k % w, k / w, w, h)) as f32;
+                [v, v, v, 1.0]
+            })
+            .collect();
+        HdrImage {
+            width: w,
+            height: h,
+            pixels,
+        }
+    }
+
+    /// Each texel's normal and its value in `irradiance_cube`'s (grey) cube.
+    fn cube_texels(cube: &[[f32; 4]], face: u32) -> impl Iterator<Item = (DVec3, f64)> + '_ {
+        let texels = (face * face) as usize;
+        cube.iter().enumerate().map(move |(k, e)| {
+            let (f, i) = ((k / texels) as u32, (k % texels) as u32);
+            let (u, v) = (f64::from(i % face) + 0.5, f64::from(i / face) + 0.5);
+            let n = cube_direction(f, u / f64::from(face), v / f64::from(face));
+            (n, f64::from(e[0]))
+        })
+    }
+
+    #[test]
+    fn the_irradiance_cube_of_a_linear_map_is_its_exact_irradiance_within_its_cells() {
+        // L(ω) = 1 + b·ω: E(n) = π + (2π/3) b·n, which the order-2 harmonics hold exactly too.
+        // The cube's cells that the normal's horizon cuts count whole: within 0.2 %.
+        let b = DVec3::new(0.25, 0.5, -0.125);
+        let map = map_of(512, 256, |d| 1.0 + b.dot(d));
+        let cube = irradiance_cube(&map, IRRADIANCE_FACE);
+        assert_eq!(cube.len(), 6 * (IRRADIANCE_FACE * IRRADIANCE_FACE) as usize);
+        let sh = irradiance_sh(&map);
+        let mut worst = 0.0f64;
+        for (n, e) in cube_texels(&cube, IRRADIANCE_FACE) {
+            let exact = PI + 2.0 * PI / 3.0 * b.dot(n);
+            let harmonics: f64 = sh9(n)
+                .iter()
+                .zip(&sh)
+                .map(|(y, c)| y * f64::from(c[0]))
+                .sum();
+            assert!(
+                (harmonics - exact).abs() < 1e-3 * exact,
+                "{n}: {harmonics} {exact}"
+            );
+            worst = worst.max((e - exact).abs() / exact);
+        }
+        assert!(worst < 2e-3, "worst relative error {worst}");
+    }
+
+    #[test]
+    fn the_irradiance_cube_holds_a_small_lamp_that_the_harmonics_ring_around() {
+        // A 3° lamp of radiance 400 over a sky of 0.1: away from the lamp's horizon the
+        // irradiance is π·0.1 plus the lamp's power times n·d.
+        let lamp = DVec3::new(0.3, 0.8, -0.5).normalize();
+        let cos_radius = 3f64.to_radians().cos();
+        let map = map_of(
+            512,
+            256,
+            |d| if d.dot(lamp) > cos_radius { 400.0 } else { 0.1 },
+        );
+        let (w, h) = (map.width, map.height);
+        let power: f64 = (0..w * h)
+            .filter(|k| equirect_direction(k % w, k / w, w, h).dot(lamp) > cos_radius)
+            .map(|k| (400.0 - 0.1) * texel_solid_angle(k / w, w, h))
+            .sum();
+        let cube = irradiance_cube(&map, IRRADIANCE_FACE);
+        let sh = irradiance_sh(&map);
+        let (mut worst, mut worst_sh) = (0.0f64, 0.0f64);
+        for (n, e) in cube_texels(&cube, IRRADIANCE_FACE) {
+            let cos = n.dot(lamp);
+            if cos.abs() < 0.1 {
+                continue;
+            }
+            let exact = PI * 0.1 + power * cos.max(0.0);
+            let harmonics: f64 = sh9(n)
+                .iter()
+                .zip(&sh)
+                .map(|(y, c)| y * f64::from(c[0]))
+                .sum();
+            worst = worst.max((e - exact).abs() / exact);
+            worst_sh = worst_sh.max((harmonics - exact).abs() / exact);
+        }
+        assert!(worst < 5e-3, "cube: worst relative error {worst}");
+        assert!(worst_sh > 0.5, "harmonics: worst relative error {worst_sh}");
     }
 
     #[test]

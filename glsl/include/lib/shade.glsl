@@ -196,7 +196,9 @@ vec3 lobe_lamps(float alpha, bool retro, bool behind, vec2 top) {
 // What a Lambertian lobe of unit weight sends back (src/model/diffuse.rs): the irradiance at
 // the point over π — the lights' E·max(n·l, 0), and the environment's, cosine-convolved
 // (its order-2 spherical harmonics, tables::environment::irradiance_sh). Under `ibl=lamps`
-// the harmonics are those of the map without its lamps, and the lamps are lit as the lights.
+// the environment's is that of the map without its lamps, read from its irradiance cube
+// (tables::environment::irradiance_cube: exact, where the harmonics ring around the sunset's
+// bright horizon; tests/suite/ibl.rs), and the lamps are lit as the lights.
 vec3 diffuse_light() {
     vec3 sum = vec3(0.0);
     uint count = LIGHTS != 0u ? light_info.x : 0u;
@@ -207,16 +209,20 @@ vec3 diffuse_light() {
     }
     float scale = frame.params.y;
     if (scale > 0.0) {
+        vec3 environment;
         vec3 lamps = vec3(0.0);
         if (IBL == IBL_LAMPS) {
+            environment = textureLod(lamps_irradiance, shade_n, 0.0).rgb;
             [[unroll]] for (uint k = 0u; k < IBL_LAMP_COUNT; ++k) {
                 vec4 irradiance = ibl_lamp(2u * k + 1u);
                 if (irradiance.w > 0.0) {
                     lamps += irradiance.rgb * max(dot(shade_n, ibl_lamp(2u * k).xyz), 0.0);
                 }
             }
+        } else {
+            environment = ibl_irradiance(shade_n, frame.irradiance);
         }
-        sum += scale * (ibl_irradiance(shade_n, frame.irradiance) + lamps);
+        sum += scale * (environment + lamps);
     }
     return sum * INV_PI;
 }
