@@ -761,11 +761,7 @@ impl<'g> Renderer<'g> {
                 )))
             }
         };
-        // Built with the lamps' cube; any other pass never reads it.
-        let irradiance = self
-            .environment
-            .lamps_irradiance_view()
-            .unwrap_or(&self.environment.view);
+        let lamps_irradiance = self.environment.lamps_irradiance_binding();
         let mut scene = DescriptorSet::new(device, &self.scene_layout, "scene")?;
         scene
             .write(0, Resource::Buffer(&uniforms))
@@ -776,7 +772,7 @@ impl<'g> Renderer<'g> {
             // other never reads the binding, which holds the Karis cube until then.
             .write(4, Resource::Sampled(matched, &self.sampler))
             .write(5, Resource::Sampled(&self.moments.view, &self.sampler))
-            .write(6, Resource::Sampled(irradiance, &self.sampler));
+            .write(6, Resource::Sampled(lamps_irradiance, &self.sampler));
         Ok(FrameSets {
             shading,
             scene,

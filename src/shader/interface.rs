@@ -28,7 +28,7 @@ pub struct FrameConstants {
     /// x: mip count of the prefiltered environment.
     pub params: [f32; 4],
     /// The environment's irradiance in order-2 spherical harmonics
-    /// (`tables::environment::irradiance_sh`).
+    /// (`tables::irradiance::irradiance_sh`).
     pub irradiance: [[f32; 4]; 9],
 }
 

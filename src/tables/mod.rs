@@ -11,6 +11,7 @@ pub mod belcour;
 pub mod environment;
 pub mod fgd;
 pub mod fgd_study;
+pub mod irradiance;
 pub mod lamps;
 pub mod lobe_albedo;
 pub mod lobe_fit;

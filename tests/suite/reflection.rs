@@ -475,17 +475,22 @@ fn graphics_passes_declare_the_shading_and_scene_sets() {
             // Each stage declares part of the pipeline layout, as the host lays it out; the
             // fragment pass that shades declares both sets whole but the environment's
             // sampling (scene binding 3), which only the reference pass reads (then with the
-            // whole scene set and the lobe table, shading binding 5; or, evaluating its lobes
-            // per pixel, with the whole shading set but the lobe table).
+            // scene set and the lobe table, shading binding 5; or, evaluating its lobes per
+            // pixel, with the whole shading set but the lobe table). A reference integrates a
+            // diffuse lobe itself, so it leaves out the lamps' irradiance (scene binding 6).
             let all = |set: u32| (0..sets[&set].len() as u32).map(move |b| (set, b));
             let required: Vec<(u32, u32)> = if entry != "forward.frag.glsl" {
                 Vec::new()
             } else if defines.contains(&("LAMINA_REFERENCE_EVALUATED", "1")) {
                 all(SCENE_SET)
+                    .filter(|&(_, b)| b != 6)
                     .chain(all(SHADING_SET).filter(|&(_, b)| b != 5))
                     .collect()
             } else if defines.contains(&("LAMINA_REFERENCE", "1")) {
-                all(SCENE_SET).chain([(SHADING_SET, 5)]).collect()
+                all(SCENE_SET)
+                    .filter(|&(_, b)| b != 6)
+                    .chain([(SHADING_SET, 5)])
+                    .collect()
             } else {
                 all(SHADING_SET)
                     .chain(all(SCENE_SET).filter(|&(_, b)| b != 3))

@@ -31,7 +31,7 @@ layout(set = 1, binding = 4) uniform samplerCube matched;
 // which mip `ibl=matched` reads the matched cube.
 layout(set = 1, binding = 5) uniform sampler2D lobe_moments;
 // Under `ibl=lamps`, the irradiance of the map without its lamps at each normal
-// (tables::environment::irradiance_cube), which lights a diffuse base; no other pass reads it.
+// (tables::irradiance::irradiance_cube), which lights a diffuse base; no other pass reads it.
 layout(set = 1, binding = 6) uniform samplerCube lamps_irradiance;
 
 #endif

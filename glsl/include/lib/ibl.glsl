@@ -106,7 +106,7 @@ vec2 ibl_lobe_fit_polynomial(vec4 terms, float alpha) {
 // The irradiance E(n) of an environment given by its order-2 spherical-harmonic coefficients,
 // each already times its band's cosine-lobe factor Â_l (π, 2π/3, π/4): Ramamoorthi & Hanrahan,
 // "An Efficient Representation for Irradiance Environment Maps" (2001). The coefficients come
-// from tables::environment::irradiance_sh, in the order Y00, Y1−1, Y10, Y11, Y2−2, Y2−1, Y20,
+// from tables::irradiance::irradiance_sh, in the order Y00, Y1−1, Y10, Y11, Y2−2, Y2−1, Y20,
 // Y21, Y22.
 vec3 ibl_irradiance(vec3 n, vec4 c[9]) {
     vec3 e = c[0].rgb * 0.282095;

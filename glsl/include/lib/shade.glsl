@@ -195,9 +195,9 @@ vec3 lobe_lamps(float alpha, bool retro, bool behind, vec2 top) {
 
 // What a Lambertian lobe of unit weight sends back (src/model/diffuse.rs): the irradiance at
 // the point over π — the lights' E·max(n·l, 0), and the environment's, cosine-convolved
-// (its order-2 spherical harmonics, tables::environment::irradiance_sh). Under `ibl=lamps`
+// (its order-2 spherical harmonics, tables::irradiance::irradiance_sh). Under `ibl=lamps`
 // the environment's is that of the map without its lamps, read from its irradiance cube
-// (tables::environment::irradiance_cube: exact, where the harmonics ring around the sunset's
+// (tables::irradiance::irradiance_cube: exact, where the harmonics ring around the sunset's
 // bright horizon; tests/suite/ibl.rs), and the lamps are lit as the lights.
 vec3 diffuse_light() {
     vec3 sum = vec3(0.0);
