@@ -156,6 +156,15 @@ mod tests {
         })
     }
 
+    /// The (grey) irradiance `irradiance_sh`'s coefficients give at normal `n`.
+    fn grey_harmonics_at(sh: &[[f32; 4]; 9], n: DVec3) -> f64 {
+        sh9(n)
+            .iter()
+            .zip(sh)
+            .map(|(y, c)| y * f64::from(c[0]))
+            .sum()
+    }
+
     #[test]
     fn the_irradiance_cube_of_a_linear_map_is_its_exact_irradiance_within_its_cells() {
         // L(ω) = 1 + b·ω: E(n) = π + (2π/3) b·n, which the order-2 harmonics hold exactly too.
@@ -168,11 +177,7 @@ mod tests {
         let mut worst = 0.0f64;
         for (n, e) in cube_texels(&cube, IRRADIANCE_FACE) {
             let exact = PI + 2.0 * PI / 3.0 * b.dot(n);
-            let harmonics: f64 = sh9(n)
-                .iter()
-                .zip(&sh)
-                .map(|(y, c)| y * f64::from(c[0]))
-                .sum();
+            let harmonics = grey_harmonics_at(&sh, n);
             assert!(
                 (harmonics - exact).abs() < 1e-3 * exact,
                 "{n}: {harmonics} {exact}"
@@ -207,11 +212,7 @@ mod tests {
                 continue;
             }
             let exact = PI * 0.1 + power * cos.max(0.0);
-            let harmonics: f64 = sh9(n)
-                .iter()
-                .zip(&sh)
-                .map(|(y, c)| y * f64::from(c[0]))
-                .sum();
+            let harmonics = grey_harmonics_at(&sh, n);
             worst = worst.max((e - exact).abs() / exact);
             worst_sh = worst_sh.max((harmonics - exact).abs() / exact);
         }
